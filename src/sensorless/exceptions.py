@@ -1,0 +1,52 @@
+"""Exception hierarchy of :mod:`sensorless`.
+
+Every error raised on purpose by the library derives from
+:class:`SensorlessError`. Each subclass also derives from the built-in
+exception a Python user would expect (``ValueError``, ``TypeError``,
+``KeyError``, ``FileNotFoundError``), so ``except ValueError`` keeps working.
+Messages state what was expected, what was received and, where there is a
+closed set, the valid options.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "DimensionError",
+    "InputValueError",
+    "LogFormatError",
+    "ModelError",
+    "NotFittedError",
+    "SensorlessError",
+    "UnknownNameError",
+]
+
+
+class SensorlessError(Exception):
+    """Root of every error raised by :mod:`sensorless`."""
+
+
+class DimensionError(SensorlessError, ValueError):
+    """An array has the wrong shape or a joint count does not match the robot."""
+
+
+class InputValueError(SensorlessError, ValueError):
+    """A value is out of its domain: NaN/inf, negative period, degrees for radians..."""
+
+
+class ModelError(SensorlessError, ValueError):
+    """A robot description is incomplete, inconsistent or cannot be read."""
+
+
+class UnknownNameError(SensorlessError, KeyError):
+    """A name (robot, scenario, method, parameter) is not one of the known ones."""
+
+    def __str__(self) -> str:  # KeyError quotes its message; keep it readable
+        return str(self.args[0]) if self.args else ""
+
+
+class NotFittedError(SensorlessError, ValueError):
+    """An estimator (threshold, identification) is used before ``fit``."""
+
+
+class LogFormatError(SensorlessError, ValueError):
+    """A log file or table does not have the expected columns, time base or values."""

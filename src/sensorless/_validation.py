@@ -26,9 +26,7 @@ def check_finite(x: FloatArray, name: str) -> None:
     if not finite.all():
         bad = np.argwhere(~finite)[0]
         where = f"sample {bad[0]}, joint {bad[1]}" if bad.size == 2 else f"index {tuple(bad)}"
-        raise InputValueError(
-            f"{name} must be finite; found {x[tuple(bad)]} at {where}"
-        )
+        raise InputValueError(f"{name} must be finite; found {x[tuple(bad)]} at {where}")
 
 
 def as_joint_array(

@@ -30,7 +30,7 @@ into chunks with the state carried over gives the same result as in one go.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -129,8 +129,8 @@ class _JointParameters:
 class FrictionModel(_JointParameters, ABC):
     """Stateless friction model: the torque depends on the current velocity only.
 
-    Subclasses implement ``_torque`` on a validated array of shape
-    ``(n_samples, n_dof)``; :meth:`torque` handles shapes and checks.
+    Subclasses implement :meth:`evaluate` on an already checked array;
+    :meth:`torque` handles shapes and checks.
     """
 
     def torque(self, qd: ArrayLike) -> FloatArray:
@@ -154,12 +154,15 @@ class FrictionModel(_JointParameters, ABC):
             If ``qd`` contains NaN or inf.
         """
         arr, single = as_joint_array(qd, self.n_dof, "qd")
-        tau = self._torque(arr)
+        tau = self.evaluate(arr)
         return tau[0] if single else tau
 
     @abstractmethod
-    def _torque(self, qd: FloatArray) -> FloatArray:
-        """Torque [N m] for a checked velocity array of shape (n_samples, n_dof)."""
+    def evaluate(self, qd: FloatArray) -> FloatArray:
+        """Torque [N m] without input checks: the fast path for inner loops.
+
+        ``qd`` must already be a finite float array of shape (..., n_dof) [rad/s].
+        """
 
 
 def _coulomb(qd: FloatArray, c_pos: FloatArray, c_neg: FloatArray) -> FloatArray:
@@ -203,7 +206,7 @@ class Coulomb(FrictionModel):
         )
         self._assign(("c_pos", "c_neg"), arrays)
 
-    def _torque(self, qd: FloatArray) -> FloatArray:
+    def evaluate(self, qd: FloatArray) -> FloatArray:
         return _coulomb(qd, self.c_pos, self.c_neg)
 
 
@@ -229,7 +232,7 @@ class Viscous(FrictionModel):
         _require("Viscous", "fv", arrays[0], ">= 0", "viscous coefficient [N m s/rad]")
         self._assign(("fv",), arrays)
 
-    def _torque(self, qd: FloatArray) -> FloatArray:
+    def evaluate(self, qd: FloatArray) -> FloatArray:
         return self.fv * qd
 
 
@@ -264,7 +267,7 @@ class CoulombViscous(FrictionModel):
         _require("CoulombViscous", "fv", arrays[2], ">= 0", "viscous coefficient [N m s/rad]")
         self._assign(("c_pos", "c_neg", "fv"), arrays)
 
-    def _torque(self, qd: FloatArray) -> FloatArray:
+    def evaluate(self, qd: FloatArray) -> FloatArray:
         return _coulomb(qd, self.c_pos, self.c_neg) + self.fv * qd
 
 
@@ -318,7 +321,7 @@ class Stribeck(FrictionModel):
         _require("Stribeck", "delta", arrays[4], "> 0", "Stribeck exponent")
         self._assign(("fc", "fs", "vs", "fv", "delta"), arrays)
 
-    def _torque(self, qd: FloatArray) -> FloatArray:
+    def evaluate(self, qd: FloatArray) -> FloatArray:
         level = _stribeck_level(np.abs(qd), self.fc, self.fs, self.vs, self.delta)
         return np.sign(qd) * level + self.fv * qd
 
@@ -360,7 +363,7 @@ class Sigmoid(FrictionModel):
         _require("Sigmoid", "phi2", arrays[1], ">= 0", "slope [s/rad]")
         self._assign(("phi1", "phi2", "phi3"), arrays)
 
-    def _torque(self, qd: FloatArray) -> FloatArray:
+    def evaluate(self, qd: FloatArray) -> FloatArray:
         offset = self.phi1 * expit(self.phi2 * self.phi3)
         return self.phi1 * expit(self.phi2 * (qd + self.phi3)) - offset
 
@@ -394,7 +397,7 @@ class HystereticError(FrictionModel):
     def __init__(self, c: ArrayLike) -> None:
         self._assign(("c",), _broadcast_parameters("HystereticError", c=c))
 
-    def _torque(self, qd: FloatArray) -> FloatArray:
+    def evaluate(self, qd: FloatArray) -> FloatArray:
         return -self.c * np.sign(qd)
 
 
@@ -463,6 +466,8 @@ class LuGre(_JointParameters):
     fs: FloatArray
     vs: FloatArray
     delta: FloatArray
+    _drop: FloatArray = field(init=False, repr=False, compare=False)
+    _gaussian: bool = field(init=False, repr=False, compare=False)
 
     def __init__(
         self,
@@ -492,6 +497,10 @@ class LuGre(_JointParameters):
         _require("LuGre", "vs", arrays[5], "> 0", "Stribeck velocity [rad/s]")
         _require("LuGre", "delta", arrays[6], "> 0", "Stribeck exponent")
         self._assign(("sigma0", "sigma1", "sigma2", "fc", "fs", "vs", "delta"), arrays)
+        # Constants of the inner loop, computed once: a simulator evaluates
+        # s(qd) several times per sample.
+        object.__setattr__(self, "_drop", self.fs - self.fc)
+        object.__setattr__(self, "_gaussian", bool(np.all(self.delta == 2.0)))
 
     @classmethod
     def canudas1995(cls, n_dof: int = 1) -> LuGre:
@@ -538,23 +547,30 @@ class LuGre(_JointParameters):
         return np.zeros(self.n_dof)
 
     def _level(self, qd: FloatArray) -> FloatArray:
+        if self._gaussian:
+            ratio = qd / self.vs
+            return np.asarray(self.fc + self._drop * np.exp(-(ratio * ratio)))
         return _stribeck_level(np.abs(qd), self.fc, self.fs, self.vs, self.delta)
 
     def _rate(self, qd: FloatArray) -> FloatArray:
         """Decay rate ``a = sigma0 |qd| / s(qd)`` [1/s] of eq. (4.22a)."""
         return self.sigma0 * np.abs(qd) / self._level(qd)
 
-    def _output(self, qd: FloatArray, z: FloatArray) -> FloatArray:
+    def output(self, qd: FloatArray, z: FloatArray) -> FloatArray:
+        """Eq. (4.22b) without input checks (inner-loop fast path of :meth:`torque_from_state`)."""
         zdot = qd - self._rate(qd) * z
         return self.sigma0 * z + self.sigma1 * zdot + self.sigma2 * qd
 
-    def _advance(self, qd: FloatArray, dt: float, z: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Exact bristle update over one period with ``qd`` held; torque at its end."""
+    def advance(self, qd: FloatArray, dt: float, z: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Exact bristle update over one period with ``qd`` held; torque at its end.
+
+        No input checks: the inner-loop fast path of :meth:`step`.
+        """
         rate_dt = self._rate(qd) * dt
         z_ss = np.sign(qd) * self._level(qd) / self.sigma0
         # expm1 keeps z_ss * (1 - exp(-a dt)) -> qd dt accurate for small a dt.
         z_new = z * np.exp(-rate_dt) - z_ss * np.expm1(-rate_dt)
-        return self._output(qd, z_new), z_new
+        return self.output(qd, z_new), z_new
 
     def _sample(self, x: ArrayLike, name: str) -> FloatArray:
         arr, single = as_joint_array(x, self.n_dof, name)
@@ -614,7 +630,7 @@ class LuGre(_JointParameters):
             raise DimensionError(
                 f"z must have the shape of qd, {np.shape(qd)}; got shape {np.shape(z)}"
             )
-        tau = self._output(qd_arr, z_arr)
+        tau = self.output(qd_arr, z_arr)
         return tau[0] if single else tau
 
     def step(self, qd: ArrayLike, dt: float, z: ArrayLike) -> tuple[FloatArray, FloatArray]:
@@ -637,7 +653,7 @@ class LuGre(_JointParameters):
             Bristle deflection at the end of the period [rad].
         """
         period = check_dt(dt)
-        return self._advance(self._sample(qd, "qd"), period, self._sample(z, "z"))
+        return self.advance(self._sample(qd, "qd"), period, self._sample(z, "z"))
 
     def torque(
         self, qd: ArrayLike, dt: float, z0: ArrayLike | None = None
@@ -670,7 +686,7 @@ class LuGre(_JointParameters):
         z = self.initial_state() if z0 is None else self._sample(z0, "z0").copy()
         tau = np.empty_like(qd_arr)
         for k in range(qd_arr.shape[0]):
-            tau[k], z = self._advance(qd_arr[k], period, z)
+            tau[k], z = self.advance(qd_arr[k], period, z)
         return (tau[0] if single else tau), z
 
     def steady_state(self, qd: ArrayLike) -> FloatArray:

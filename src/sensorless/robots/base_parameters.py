@@ -101,7 +101,9 @@ class BaseParameters:
             raise UnknownNameError(f"unknown base parameter {name!r}; options: {self.names}")
         row = self.combinations.loc[name]
         terms = []
-        for label, coef in row[row != 0].items():
+        for label, coef in zip(row.index, row.to_numpy(), strict=True):
+            if coef == 0:
+                continue
             coef_text = "" if np.isclose(abs(coef), 1.0) else f"{abs(coef):.{digits}g} "
             sign = "-" if coef < 0 else "+"
             terms.append(f"{sign} {coef_text}{label}")
@@ -161,7 +163,9 @@ def base_parameters(
     rng = np.random.default_rng(seed)
     n = robot.n_dof
     q = rng.uniform(-np.pi, np.pi, (n_samples, n))
-    observation = robot.regressor(q, rng.standard_normal((n_samples, n)), rng.standard_normal((n_samples, n)))
+    observation = robot.regressor(
+        q, rng.standard_normal((n_samples, n)), rng.standard_normal((n_samples, n))
+    )
     observation = observation.reshape(n_samples * n, -1)
     active = np.array([name not in zero for name in names])
     active_idx = np.flatnonzero(active)
@@ -195,4 +199,3 @@ def base_parameters(
     ]
     frame = pd.DataFrame(combinations, index=base_names, columns=names)
     return BaseParameters(robot, base_names, frame, independent, tol, gap, zero)
-

@@ -66,7 +66,9 @@ def puma560() -> RobotModel:
     coulomb_pos = np.array([0.395, 0.126, 0.132, 11.2e-3, 9.26e-3, 3.96e-3])
     coulomb_neg = np.array([-0.435, -0.071, -0.105, -16.9e-3, -14.5e-3, -10.5e-3])
     friction = CoulombViscous(
-        c_pos=coulomb_pos * np.abs(gear), c_neg=coulomb_neg * np.abs(gear), fv=viscous_motor * gear**2
+        c_pos=coulomb_pos * np.abs(gear),
+        c_neg=coulomb_neg * np.abs(gear),
+        fv=viscous_motor * gear**2,
     )
     lower = np.array([-160, -45, -225, -110, -100, -266]) * deg
     upper = np.array([160, 225, 45, 170, 100, 266]) * deg
@@ -102,7 +104,9 @@ def panda_urdf_path() -> Path:
     for entry in files:
         if str(entry).endswith("panda_description/urdf/panda.urdf"):
             return Path(str(entry.locate()))
-    raise ModelError("example-robot-data is installed but ships no panda_description/urdf/panda.urdf")
+    raise ModelError(
+        "example-robot-data is installed but ships no panda_description/urdf/panda.urdf"
+    )
 
 
 def panda() -> RobotModel:
@@ -144,7 +148,8 @@ def panda_gaz() -> RobotModel:
     a = [0.0, 0.0, 0.0, 0.0825, -0.0825, 0.0, 0.088]
     d = [0.333, 0.0, 0.316, 0.0, 0.384, 0.0, 0.0]
     table = [
-        {"alpha": al, "a": ai, "theta": 0.0, "d": di} for al, ai, di in zip(alpha, a, d, strict=True)
+        {"alpha": al, "a": ai, "theta": 0.0, "d": di}
+        for al, ai, di in zip(alpha, a, d, strict=True)
     ]
     masses = [4.970684, 0.646926, 3.228604, 3.587895, 1.225946, 1.666555, 0.735522]
     coms = [
@@ -197,13 +202,15 @@ def planar2(
     turn about the base z axis; gravity is −9.81 m/s² along the base y axis, so
     q = 0 is the arm stretched horizontally.
     """
-    l1, l2 = lengths
+    l1 = lengths[0]
     table = [
         {"alpha": 0.0, "a": 0.0, "theta": 0.0, "d": 0.0},
         {"alpha": 0.0, "a": l1, "theta": 0.0, "d": 0.0},
     ]
     links = [
-        LinkInertia(m, (com_ratio * length, 0.0, 0.0), np.diag([0.0, 1.0, 1.0]) * m * length**2 / 12)
+        LinkInertia(
+            m, (com_ratio * length, 0.0, 0.0), np.diag([0.0, 1.0, 1.0]) * m * length**2 / 12
+        )
         for m, length in zip(masses, lengths, strict=True)
     ]
     return RobotModel.from_mdh(

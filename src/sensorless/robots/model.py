@@ -50,7 +50,6 @@ N_LINK_PARAMETERS = len(PARAMETER_NAMES)
 # Pinocchio's dynamic parameters are [m, mx, my, mz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz];
 # _PIN_TO_THESIS[k] is the index in Pinocchio's vector of PARAMETER_NAMES[k].
 _PIN_TO_THESIS = np.array([4, 5, 7, 6, 8, 9, 1, 2, 3, 0])
-_THESIS_TO_PIN = np.argsort(_PIN_TO_THESIS)
 _MDH_FIELDS = ("alpha", "a", "theta", "d")
 _GRIPPER_WORDS = ("finger", "gripper", "hand")
 
@@ -71,8 +70,8 @@ class LinkInertia:
     """
 
     mass: float
-    com: FloatArray
-    inertia: FloatArray
+    com: ArrayLike
+    inertia: ArrayLike
 
     def __post_init__(self) -> None:
         com = np.asarray(self.com, dtype=float)
@@ -103,13 +102,14 @@ class LinkInertia:
         missing = [key for key in ("mass", "com", "inertia") if key not in value]
         if missing:
             raise ModelError(
-                f"link inertial data needs keys mass, com, inertia; missing {missing} in {dict(value)}"
+                "link inertial data needs keys mass, com, inertia; "
+                f"missing {missing} in {dict(value)}"
             )
         return cls(value["mass"], value["com"], value["inertia"])
 
     def to_pinocchio(self) -> pin.Inertia:
         """Pinocchio spatial inertia of this link, expressed in the link frame."""
-        return pin.Inertia(self.mass, self.com, self.inertia)
+        return pin.Inertia(self.mass, np.asarray(self.com), np.asarray(self.inertia))
 
 
 @dataclass(frozen=True)
@@ -124,8 +124,8 @@ class MotorData:
         Gear ratio G (motor angle / joint angle) [-]; its sign is irrelevant here.
     """
 
-    rotor_inertia: FloatArray
-    gear_ratio: FloatArray
+    rotor_inertia: ArrayLike
+    gear_ratio: ArrayLike
 
     def __post_init__(self) -> None:
         jm = np.atleast_1d(np.asarray(self.rotor_inertia, dtype=float))
@@ -143,7 +143,7 @@ class MotorData:
     @property
     def armature(self) -> FloatArray:
         """Joint-side armature Jm·G² [kg m²], shape (n_dof,)."""
-        return np.asarray(self.rotor_inertia * self.gear_ratio**2)
+        return np.asarray(self.rotor_inertia) * np.asarray(self.gear_ratio) ** 2
 
 
 def _rot_x(angle: float) -> FloatArray:
@@ -412,20 +412,20 @@ class RobotModel:
             joints = [j for j in movable if not any(w in j.lower() for w in _GRIPPER_WORDS)]
         unknown = [j for j in joints if j not in movable]
         if unknown:
-            raise ModelError(f"joints {unknown} are not movable joints of {path}; options: {movable}")
+            raise ModelError(
+                f"joints {unknown} are not movable joints of {path}; options: {movable}"
+            )
         lock = [full.getJointId(j) for j in movable if j not in joints]
         model = pin.buildReducedModel(full, lock, pin.neutral(full)) if lock else full
         order = [model.names[j] for j in range(1, model.njoints)]
         if order != list(joints):
-            raise ModelError(
-                f"joints must be listed in chain order {order}; got {list(joints)}"
-            )
+            raise ModelError(f"joints must be listed in chain order {order}; got {list(joints)}")
         n_dof = model.nv
         arm = np.zeros(n_dof) if armature is None else np.asarray(armature, dtype=float)
         if arm.shape != (n_dof,):
             raise DimensionError(f"armature must have {n_dof} entries; got shape {arm.shape}")
         model.armature = arm
-        return cls(model, name or root.get("name", path.stem), friction, description)
+        return cls(model, name or str(root.get("name", path.stem)), friction, description)
 
     @classmethod
     def from_pinocchio(
@@ -552,9 +552,7 @@ class RobotModel:
         per_link = values.reshape(self.n_dof, N_LINK_PARAMETERS)
         model = self.pinocchio_model.copy()
         for i in range(self.n_dof):
-            model.inertias[i + 1] = pin.Inertia.FromDynamicParameters(
-                per_link[i, :10][_THESIS_TO_PIN]
-            )
+            model.inertias[i + 1] = _inertia_from_parameters(per_link[i, :10], i + 1)
         model.armature = per_link[:, 10].copy()
         new_friction = self.friction if friction == "keep" else friction
         return RobotModel(model, name or self.name, new_friction, self.description)
@@ -582,7 +580,9 @@ class RobotModel:
             return int(self.pinocchio_model.getJointId(link))
         if isinstance(link, (int, np.integer)) and 1 <= int(link) <= self.n_dof:
             return int(link)
-        raise ModelError(f"link must be a number from 1 to {self.n_dof} or a joint name; got {link!r}")
+        raise ModelError(
+            f"link must be a number from 1 to {self.n_dof} or a joint name; got {link!r}"
+        )
 
     # ------------------------------------------------------------------ dynamics
     def mass_matrix(self, q: ArrayLike) -> FloatArray:
@@ -780,7 +780,9 @@ class RobotModel:
         """Labels of :meth:`regressor_terms`: ``M1.., B12.., C1.., g``."""
         n = self.n_dof
         pairs = [f"B{i + 1}{j + 1}" for i in range(n) for j in range(i + 1, n)]
-        return [f"M{i}" for i in range(1, n + 1)] + pairs + [f"C{i}" for i in range(1, n + 1)] + ["g"]
+        return (
+            [f"M{i}" for i in range(1, n + 1)] + pairs + [f"C{i}" for i in range(1, n + 1)] + ["g"]
+        )
 
     def q_vector(self, qd: ArrayLike, qdd: ArrayLike) -> FloatArray:
         """The vector Q = [q̈; q̇_i q̇_j (i<j); q̇_i²; 1] of eq. 3.11.
@@ -888,8 +890,31 @@ class RobotModel:
     def _point(point: ArrayLike) -> FloatArray:
         p = np.asarray(point, dtype=float)
         if p.shape != (3,) or not np.isfinite(p).all():
-            raise DimensionError(f"point must be a finite 3-vector in the link frame [m]; got {point!r}")
+            raise DimensionError(
+                f"point must be a finite 3-vector in the link frame [m]; got {point!r}"
+            )
         return p
+
+
+def _inertia_from_parameters(values: FloatArray, link: int) -> pin.Inertia:
+    """Spatial inertia from (XX, XY, XZ, YY, YZ, ZZ, mX, mY, mZ, m) about the link origin.
+
+    Pinocchio's ``FromDynamicParameters`` divides by the mass; a massless link
+    (PUMA link 1) keeps its rotational inertia here instead of turning into NaN.
+    """
+    xx, xy, xz, yy, yz, zz, mx, my, mz, mass = values
+    inertia_origin = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+    first_moment = np.array([mx, my, mz])
+    if mass > 0:
+        com = first_moment / mass
+        shift = mass * (com @ com * np.eye(3) - np.outer(com, com))
+        return pin.Inertia(mass, com, inertia_origin - shift)
+    if mass < 0 or np.any(first_moment != 0):
+        raise ModelError(
+            f"link {link}: mass must be >= 0 and a massless link has zero first moments; "
+            f"got m = {mass}, (mX, mY, mZ) = {tuple(first_moment)}"
+        )
+    return pin.Inertia(0.0, np.zeros(3), inertia_origin)
 
 
 def _prune_urdf(root: ET.Element, tip: str) -> None:
@@ -897,20 +922,20 @@ def _prune_urdf(root: ET.Element, tip: str) -> None:
     links = {link.get("name") for link in root.findall("link")}
     if tip not in links:
         raise ModelError(f"tip link {tip!r} not in the URDF; options: {sorted(map(str, links))}")
-    parent_of = {
-        j.find("child").get("link"): (j, j.find("parent").get("link"))  # type: ignore[union-attr]
-        for j in root.findall("joint")
-    }
+    parent_of: dict[str, str] = {}
+    for joint in root.findall("joint"):
+        child, parent = joint.find("child"), joint.find("parent")
+        if child is None or parent is None:
+            raise ModelError(f"URDF joint {joint.get('name')!r} needs a parent and a child link")
+        parent_of[str(child.get("link"))] = str(parent.get("link"))
     keep = {tip}
     node = tip
     while node in parent_of:
-        node = parent_of[node][1]
+        node = parent_of[node]
         keep.add(node)
     for link in root.findall("link"):
         if link.get("name") not in keep:
             root.remove(link)
     for joint in root.findall("joint"):
-        child = joint.find("child").get("link")  # type: ignore[union-attr]
-        if child not in keep:
+        if str(joint.find("child").get("link")) not in keep:  # type: ignore[union-attr]
             root.remove(joint)
-

@@ -1,0 +1,1 @@
+"""Simulation: plants, controllers, sensors, model error, collisions and scenarios."""

@@ -1,0 +1,347 @@
+"""Benchmark scenarios: plain YAML files that describe a labelled simulated run.
+
+A scenario names the true and the nominal robot, how they differ (model
+error), the controller, the trajectory, the sensors, the contacts, the
+duration and the seed. Shipped scenarios live in ``sensorless/data/scenarios``;
+any other YAML file with the same keys works too (see the shipped files for
+the schema, which :func:`load_scenario` validates).
+
+Seeds: ``model_error.seed`` fixes the nominal model, so every run of a
+scenario shares one robot and one model error (the situation of a user who
+tunes on some runs and detects on others); the run seed drives sensor noise,
+random trajectories and random contacts. :func:`generate` derives the seeds
+of N collision-free and N collision runs from one master seed with
+``numpy.random.SeedSequence``, so tuning and test data never share a seed.
+"""
+
+from __future__ import annotations
+
+import copy
+import importlib.resources
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import yaml
+
+from .. import __version__
+from ..exceptions import ModelError, UnknownNameError
+from ..friction import CoulombViscous, LuGre
+from ..io import write_log
+from ..robots import load as load_robot
+from ..robots.model import RobotModel
+from ..trajectories import QuinticViaPoints, RandomPointToPoint, Trajectory
+from .collisions import Contact, ContactSet, HalfSine, Push, Recorded
+from .controllers import JointPID
+from .model_error import perturb
+from .plants import FlexiblePlant, Friction, RigidPlant, TorqueFeedback
+from .sensors import SensorModel
+from .simulator import SimulationResult, simulate
+
+__all__ = ["Scenario", "available_scenarios", "generate", "load_scenario", "lugre_from"]
+
+_KEYS = {
+    "name", "description", "duration", "dt", "seed", "robot", "nominal_robot", "model_error",
+    "true_friction",
+    "plant", "controller", "trajectory", "sensors", "collisions", "random_collisions",
+}  # fmt: skip
+
+
+def _scenario_dir() -> Path:
+    return Path(str(importlib.resources.files("sensorless") / "data" / "scenarios"))
+
+
+def available_scenarios() -> list[str]:
+    """Names of the scenarios shipped with the package."""
+    return sorted(p.stem for p in _scenario_dir().glob("*.yaml"))
+
+
+def lugre_from(
+    friction: CoulombViscous,
+    *,
+    stiction_ratio: float = 1.5,
+    stribeck_velocity: float = 0.01,
+    presliding: float = 1e-4,
+) -> LuGre:
+    """A LuGre model with the steady state of a Coulomb + viscous model.
+
+    F_c is the mean of |C₊| and |C₋|, F_s = ``stiction_ratio``·F_c, σ2 the
+    viscous coefficient, σ0 = F_c / ``presliding`` (the presliding
+    displacement [rad] at which the bristles carry F_c) and σ1 = √σ0, the
+    ratio of Canudas de Wit et al. (1995, Table I: F_s/F_c = 1.5, σ1 = √σ0).
+    These choices are ours (the thesis gives no LuGre numbers for the PUMA).
+    """
+    fc = 0.5 * (np.abs(friction.c_pos) + np.abs(friction.c_neg))
+    sigma0 = fc / presliding
+    return LuGre(
+        sigma0=sigma0,
+        sigma1=np.sqrt(sigma0),
+        sigma2=friction.fv,
+        fc=fc,
+        fs=stiction_ratio * fc,
+        vs=stribeck_velocity,
+    )
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A parsed scenario; :meth:`run` simulates it.
+
+    Attributes
+    ----------
+    name : str
+    spec : dict
+        The YAML content (validated).
+    """
+
+    name: str
+    spec: dict[str, Any]
+
+    @property
+    def duration(self) -> float:
+        """Simulated time [s]."""
+        return float(self.spec["duration"])
+
+    @property
+    def dt(self) -> float:
+        """Control period [s]."""
+        return float(self.spec.get("dt", 1e-3))
+
+    @property
+    def seed(self) -> int:
+        """Default run seed."""
+        return int(self.spec.get("seed", 0))
+
+    def robots(self) -> tuple[RobotModel, RobotModel]:
+        """The true robot (with its true friction) and the nominal model the user has."""
+        true = load_robot(self.spec["robot"])
+        nominal = load_robot(self.spec.get("nominal_robot", self.spec["robot"]))
+        true_friction = _friction(self.spec.get("true_friction", "robot"), true)
+        true = true.with_standard_parameters(true.parameter_vector(), friction=true_friction)
+        error = self.spec.get("model_error")
+        if error:
+            nominal = perturb(
+                nominal,
+                relative=float(error.get("inertial", 0.0)),
+                friction_relative=float(error.get("friction", error.get("inertial", 0.0))),
+                seed=int(error.get("seed", 0)),
+                name=f"{nominal.name} (nominal)",
+            )
+        return true, nominal
+
+    def build(self, seed: int | None = None, collisions: bool = True) -> dict[str, Any]:
+        """Everything :func:`simulate` needs, as keyword arguments."""
+        seed = self.seed if seed is None else seed
+        rng = np.random.default_rng(seed)
+        true, nominal = self.robots()
+        plant = _plant(self.spec.get("plant", {"type": "rigid"}), true)
+        trajectory = _trajectory(self.spec["trajectory"], true, self.duration, rng)
+        controller = _controller(self.spec["controller"], nominal, trajectory)
+        contacts = ContactSet([])
+        if collisions:
+            contacts = _contacts(self.spec, true, self.duration, rng)
+        return {
+            "plant": plant,
+            "controller": controller,
+            "trajectory": trajectory,
+            "duration": self.duration,
+            "dt": self.dt,
+            "sensors": SensorModel.from_dict(self.spec.get("sensors", {})),
+            "contacts": contacts,
+            "seed": seed,
+            "metadata": {
+                "scenario": self.name,
+                "robot": true.name,
+                "nominal_robot": nominal.name,
+                "model_error": self.spec.get("model_error"),
+                "collisions_enabled": collisions,
+                "library_version": __version__,
+            },
+        }
+
+    def run(
+        self,
+        seed: int | None = None,
+        collisions: bool = True,
+        progress: Callable[[int, int], None] | None = None,
+    ) -> SimulationResult:
+        """Simulate the scenario with a run seed (default: the scenario's)."""
+        return simulate(**self.build(seed, collisions), progress=progress)
+
+
+def load_scenario(name_or_path: str | Path) -> Scenario:
+    """Load a shipped scenario by name, or a scenario YAML file by path."""
+    path = Path(name_or_path)
+    if not path.suffix:
+        path = _scenario_dir() / f"{name_or_path}.yaml"
+        if not path.is_file():
+            raise UnknownNameError(
+                f"unknown scenario {name_or_path!r}; shipped scenarios: {available_scenarios()} "
+                "(or give the path of a YAML file)"
+            )
+    if not path.is_file():
+        raise ModelError(f"scenario file not found: {path}")
+    with path.open(encoding="utf-8") as handle:
+        spec = yaml.safe_load(handle)
+    if not isinstance(spec, Mapping):
+        raise ModelError(f"scenario {path} must be a YAML mapping; got {type(spec).__name__}")
+    unknown = set(spec) - _KEYS
+    if unknown:
+        raise ModelError(
+            f"scenario {path}: unknown keys {sorted(unknown)}; valid keys: {sorted(_KEYS)}"
+        )
+    missing = {"duration", "robot", "controller", "trajectory"} - set(spec)
+    if missing:
+        raise ModelError(f"scenario {path}: missing keys {sorted(missing)}")
+    return Scenario(str(spec.get("name", path.stem)), copy.deepcopy(dict(spec)))
+
+
+def generate(
+    scenario: Scenario,
+    n_runs: int,
+    master_seed: int,
+    out_dir: str | Path,
+    *,
+    file_format: str = "parquet",
+    progress: Callable[[str], None] | None = None,
+) -> list[Path]:
+    """Write ``n_runs`` collision-free and ``n_runs`` collision logs of one scenario.
+
+    Seeds come from ``SeedSequence(master_seed).spawn(2 n_runs)``: the first
+    half for the collision-free (tuning) runs, the second for the collision
+    (test) runs, so the two sets never share a seed.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    children = np.random.SeedSequence(master_seed).spawn(2 * n_runs)
+    seeds = [int(child.generate_state(1)[0]) for child in children]
+    paths = []
+    for index, seed in enumerate(seeds):
+        collisions = index >= n_runs
+        kind = "collision" if collisions else "free"
+        path = out / f"{scenario.name}-{kind}-{index % n_runs:03d}.{file_format}"
+        result = scenario.run(seed=seed, collisions=collisions)
+        paths.append(write_log(result.log, path))
+        if progress is not None:
+            progress(str(path))
+    return paths
+
+
+# ---------------------------------------------------------------- spec readers
+def _friction(spec: Any, robot: RobotModel) -> Friction:
+    if spec == "robot":
+        return robot.friction
+    if spec in (None, "none"):
+        return None
+    kind = spec.get("type")
+    if kind == "lugre":
+        base = robot.friction
+        if not isinstance(base, CoulombViscous):
+            raise ModelError(
+                "lugre friction from the robot needs Coulomb + viscous friction; "
+                f"{robot.name} has {base}"
+            )
+        options = {k: v for k, v in spec.items() if k != "type"}
+        return lugre_from(base, **options)
+    raise ModelError(f"unknown friction type {kind!r}; options: robot, none, lugre")
+
+
+def _plant(spec: Mapping[str, Any], robot: RobotModel) -> RigidPlant | FlexiblePlant:
+    kind = spec.get("type", "rigid")
+    if kind == "rigid":
+        return RigidPlant(robot)
+    if kind == "flexible":
+        feedback = spec.get("feedback")
+        return FlexiblePlant(
+            robot,
+            stiffness=spec["stiffness"],
+            damping=spec.get("damping", 0.0),
+            motor_inertia=spec.get("motor_inertia"),
+            motor_friction=_friction(spec.get("motor_friction", "none"), robot),
+            link_friction=_friction(spec.get("link_friction", "robot"), robot),
+            feedback=None
+            if feedback is None
+            else TorqueFeedback(feedback["motor_inertia"], feedback["damping"]),
+        )
+    raise ModelError(f"unknown plant type {kind!r}; options: rigid, flexible")
+
+
+def _trajectory(
+    spec: Mapping[str, Any], robot: RobotModel, duration: float, rng: np.random.Generator
+) -> Trajectory:
+    kind = spec.get("type")
+    if kind == "via_points":
+        points = np.asarray(spec["points"], dtype=float)
+        sign = np.asarray(spec.get("joint_sign", np.ones(robot.n_dof)), dtype=float)
+        table = pd.DataFrame(
+            points[:, 1:] * sign, columns=[f"q{j + 1}" for j in range(robot.n_dof)]
+        )
+        table.insert(0, "time", points[:, 0])
+        repeat = max(1, int(np.ceil(duration / points[-1, 0])))
+        return QuinticViaPoints.from_table(
+            table, degrees=bool(spec.get("degrees", True)), repeat=repeat
+        )
+    if kind == "random_point_to_point":
+        lower, upper = robot.position_limits
+        margin = float(spec.get("limit_margin", 0.2))
+        span = upper - lower
+        return RandomPointToPoint(
+            robot.n_dof,
+            duration,
+            lower + margin * span,
+            upper - margin * span,
+            float(spec["max_velocity"]),
+            seed=int(rng.integers(2**31)),
+            segment_time=tuple(spec.get("segment_time", (1.0, 3.0))),
+            rest=tuple(spec.get("rest", (0.0, 0.5))),
+        )
+    raise ModelError(
+        f"unknown trajectory type {kind!r}; options: via_points, random_point_to_point"
+    )
+
+
+def _controller(spec: Mapping[str, Any], nominal: RobotModel, trajectory: Trajectory) -> JointPID:
+    options = {k: v for k, v in spec.items() if k not in ("type", "bandwidth", "damping_ratio")}
+    if "bandwidth" in spec:
+        # Gains from the nominal inertia at the start pose: kp = J ω², kd = 2 ζ J ω.
+        q0 = trajectory.evaluate(0.0)[0]
+        inertia = np.diag(nominal.mass_matrix(q0))
+        omega = float(spec["bandwidth"])
+        zeta = float(spec.get("damping_ratio", 1.0))
+        options.setdefault("kp", inertia * omega**2)
+        options.setdefault("kd", 2 * zeta * inertia * omega)
+        options.setdefault("ki", 0.0)
+    return JointPID(model=nominal, **options)
+
+
+def _profile(spec: Mapping[str, Any]) -> Any:
+    kind = spec["profile"]
+    if kind == "half_sine":
+        return HalfSine(spec["start"], spec["duration"], spec["peak"])
+    if kind == "push":
+        return Push(spec["start"], spec["ramp"], spec["hold"], spec["release"], spec["peak"])
+    if kind == "recorded":
+        return Recorded.from_csv(
+            spec["file"], start=spec.get("start", 0.0), scale=spec.get("scale", 1.0)
+        )
+    raise ModelError(f"unknown force profile {kind!r}; options: half_sine, push, recorded")
+
+
+def _contacts(
+    spec: Mapping[str, Any], robot: RobotModel, duration: float, rng: np.random.Generator
+) -> ContactSet:
+    if "random_collisions" in spec:
+        options = dict(spec["random_collisions"])
+        count = int(options.pop("count"))
+        for key in ("peak_range", "duration_range"):
+            if key in options:
+                options[key] = tuple(options[key])
+        return ContactSet.random(robot, count, duration, rng, **options)
+    contacts = [
+        Contact(c["id"], c["link"], c.get("point", (0.0, 0.0, 0.0)), c["direction"], _profile(c))
+        for c in spec.get("collisions", [])
+    ]
+    return ContactSet(contacts)

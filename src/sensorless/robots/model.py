@@ -601,8 +601,9 @@ class RobotModel:
         model, data = self.pinocchio_model, self._data
         out = np.empty((qs.shape[0], self.n_dof, self.n_dof))
         for k, qk in enumerate(qs):
-            mass = pin.crba(model, data, qk)
-            out[k] = np.triu(mass) + np.triu(mass, 1).T
+            out[k] = pin.crba(model, data, qk)
+        # CRBA fills the upper triangle; mirror it once for the whole batch.
+        out = np.triu(out) + np.swapaxes(np.triu(out, 1), 1, 2)
         return out[0] if single else out
 
     def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike) -> FloatArray:
@@ -732,12 +733,14 @@ class RobotModel:
         inertial = (np.arange(n)[:, None] * N_LINK_PARAMETERS + np.arange(10)).ravel()
         source = (np.arange(n)[:, None] * 10 + _PIN_TO_THESIS).ravel()
         rows = np.arange(n)
-        armature = rows * N_LINK_PARAMETERS + 10
         model, data = self.pinocchio_model, self._data
+        pinocchio_order = np.empty((qs.shape[0], n, 10 * n))
         for k in range(qs.shape[0]):
-            y10 = pin.computeJointTorqueRegressor(model, data, qs[k], qds[k], qdds[k])
-            out[k][:, inertial] = y10[:, source]
-            out[k][rows, armature] = qdds[k]
+            pinocchio_order[k] = pin.computeJointTorqueRegressor(
+                model, data, qs[k], qds[k], qdds[k]
+            )
+        out[:, :, inertial] = pinocchio_order[:, :, source]
+        out[:, rows, rows * N_LINK_PARAMETERS + 10] = qdds
 
     def regressor_terms(self, q: ArrayLike) -> FloatArray:
         """Split regressor Y_k^q(q) of eq. 3.10–3.12: Y(q, q̇, q̈) = Σ_k Y_k^q(q) Q_k.

@@ -1,0 +1,567 @@
+"""Collision detection: a residual outside its threshold bounds, grouped into events.
+
+A sample is *outside* when the residual of any monitored joint is below its
+lower or above its upper bound (eq. 3.37/3.39, 4.34, 5.31). Consecutive
+outside samples form an event; ``start`` and ``end`` are the times of its
+first and last outside sample. Two events whose gap (start of the second
+minus end of the first) is shorter than ``hold`` [s] are merged, and events
+lasting less than ``min_duration`` [s] (``end - start``) are dropped, after
+merging. An event's ``joints`` are those outside at any of its samples and
+its ``peak`` is the largest excursion beyond a bound (the first one if
+several are equal).
+
+:meth:`Detector.run` / :meth:`Detector.detect` work on a recorded run;
+:meth:`Detector.initial_state`, :meth:`Detector.step` and
+:meth:`Detector.finish` on a live stream, and give the same events.
+
+Faulty samples in a stream
+--------------------------
+:meth:`Detector.step` never raises on bad data. A sample with a NaN or an
+infinity in any input, or whose time does not increase past the last
+accepted sample, gives a verdict with status ``"fault"`` and returns the
+state unchanged: the sample is skipped as if it had not arrived, so the
+filters of the threshold do not advance and every later verdict equals the
+one of the same stream without that sample. The threshold's filters treat
+the next accepted sample as one period ``dt`` later. ``run(...,
+skip_nonfinite=True)`` applies the same rule to a recorded run; by default
+it raises instead.
+
+Examples
+--------
+>>> import numpy as np
+>>> from sensorless.signals import ObserverSignals
+>>> from sensorless.thresholds import ConstantThreshold
+>>> t = np.arange(100) * 1e-3
+>>> r = 0.1 * np.sin(40 * t)[:, None]
+>>> z = np.zeros_like(r)
+>>> fit_run = ObserverSignals(t, r, z, z, z, z, gain=20.0, robot="demo")
+>>> detector = Detector(ConstantThreshold(margin=0.05).fit(fit_run))
+>>> hit = r.copy()
+>>> hit[40:50] += 1.0
+>>> events = detector.detect(ObserverSignals(t, hit, z, z, z, z, gain=20.0, robot="demo"))
+>>> [(round(e.start, 3), round(e.end, 3), e.joints) for e in events]
+[(0.04, 0.049, (1,))]
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+import pandas as pd
+from numpy.typing import ArrayLike, NDArray
+
+from ._validation import FloatArray, as_joint_array, check_dt
+from .exceptions import DimensionError, InputValueError
+from .signals import Event, ObserverSignals
+from .thresholds.base import Threshold, ThresholdState, check_joints, check_seconds
+
+__all__ = [
+    "DetectionResult",
+    "Detector",
+    "DetectorState",
+    "Verdict",
+    "events_to_pandas",
+]
+
+BoolArray = NDArray[np.bool_]
+Status = Literal["ok", "collision", "fault"]
+
+_EVENT_COLUMNS = ["start", "end", "duration", "joints", "peak", "peak_residual", "method"]
+_STREAM_INPUTS = ("residual", "model_torque", "friction", "sign", "velocity")
+
+
+@dataclass(frozen=True)
+class _OpenEvent:
+    """An event that may still grow: times [s], 1-based joints, peak excursion [N m]."""
+
+    start: float
+    end: float
+    joints: tuple[int, ...]
+    peak: float
+    peak_residual: float
+
+    def merged(self, later: _OpenEvent) -> _OpenEvent:
+        keep_peak = later.peak <= self.peak
+        return _OpenEvent(
+            start=self.start,
+            end=later.end,
+            joints=tuple(sorted(set(self.joints) | set(later.joints))),
+            peak=self.peak if keep_peak else later.peak,
+            peak_residual=self.peak_residual if keep_peak else later.peak_residual,
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Verdict:
+    """What :meth:`Detector.step` says about one sample.
+
+    Attributes
+    ----------
+    status : {"ok", "collision", "fault"}
+        ``"collision"``: the sample is outside its bounds and the event it
+        belongs to has lasted at least ``min_duration``; ``"fault"``: the
+        sample was skipped (non-finite input or time not increasing).
+    t : float
+        Time of the sample [s].
+    joints : tuple of int
+        Monitored joints (1-based) outside their bounds at this sample; may
+        be non-empty with status ``"ok"`` while an event is shorter than
+        ``min_duration``.
+    residual, lower, upper : ndarray of shape (n_dof,)
+        Residual and bounds at this sample [N m] (bounds NaN on a fault).
+    event : Event or None
+        The event that ended at this sample (after ``hold`` and
+        ``min_duration``), else None.
+    message : str
+        Why the sample is a fault; empty otherwise.
+    """
+
+    status: Status
+    t: float
+    joints: tuple[int, ...]
+    residual: FloatArray
+    lower: FloatArray
+    upper: FloatArray
+    event: Event | None = None
+    message: str = ""
+
+
+@dataclass(frozen=True, eq=False)
+class DetectorState:
+    """Streaming state of a :class:`Detector`; obtain it from :meth:`Detector.initial_state`.
+
+    Attributes
+    ----------
+    dt : float
+        Sample period of the stream [s].
+    threshold : ThresholdState or None
+        State of the threshold; None until the first accepted sample.
+    t : float
+        Time of the last accepted sample [s] (``-inf`` before any).
+    outside : bool
+        Whether the last accepted sample was outside its bounds.
+    open_event : object or None
+        The event in progress (possibly in its ``hold`` gap).
+    """
+
+    dt: float
+    threshold: ThresholdState | None = None
+    t: float = -math.inf
+    outside: bool = False
+    open_event: _OpenEvent | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class DetectionResult:
+    """Detection over a recorded run.
+
+    Attributes
+    ----------
+    t : ndarray of shape (n_samples,)
+        Time [s].
+    residual, lower, upper : ndarray of shape (n_samples, n_dof)
+        Residual and bounds [N m]; bounds are NaN at skipped samples.
+    outside : ndarray of bool, shape (n_samples, n_dof)
+        Monitored joint outside its bounds.
+    valid : ndarray of bool, shape (n_samples,)
+        Sample used (False: skipped, see the module docstring).
+    events : list of Event
+        Detected events.
+    method : str
+        Name of the threshold family.
+    joints : tuple of int
+        Monitored joints (1-based).
+    dt : float
+        Sample period the threshold's filters used [s]: the median step of
+        the accepted samples. Stream with this ``dt`` to reproduce the run.
+    """
+
+    t: FloatArray
+    residual: FloatArray
+    lower: FloatArray
+    upper: FloatArray
+    outside: BoolArray
+    valid: BoolArray
+    events: list[Event]
+    method: str
+    joints: tuple[int, ...]
+    dt: float
+
+    def to_pandas(self) -> pd.DataFrame:
+        """Per-sample table: ``t``, ``valid`` and ``residual_j``, ``lower_j``, ``upper_j``,
+        ``outside_j`` for joints j = 1..n_dof."""
+        columns: dict[str, Any] = {"t": self.t, "valid": self.valid}
+        for name in ("residual", "lower", "upper", "outside"):
+            values = getattr(self, name)
+            for j in range(values.shape[1]):
+                columns[f"{name}_{j + 1}"] = values[:, j]
+        return pd.DataFrame(columns)
+
+    def events_to_pandas(self) -> pd.DataFrame:
+        """The events as a table, see :func:`events_to_pandas`."""
+        return events_to_pandas(self.events)
+
+
+def events_to_pandas(events: list[Event]) -> pd.DataFrame:
+    """Table of events: start, end, duration [s], joints (tuple, 1-based), peak,
+    peak_residual [N m], method; one row per event."""
+    rows = [
+        [e.start, e.end, e.duration, e.joints, e.peak, e.peak_residual, e.method] for e in events
+    ]
+    return pd.DataFrame(rows, columns=_EVENT_COLUMNS)
+
+
+def _excursion(residual: FloatArray, lower: FloatArray, upper: FloatArray) -> FloatArray:
+    """How far beyond its bounds each residual is [N m] (> 0 outside)."""
+    return np.asarray(np.maximum(residual - upper, lower - residual))
+
+
+class Detector:
+    """Detect collisions as residuals outside the bounds of a fitted threshold.
+
+    Parameters
+    ----------
+    threshold : Threshold
+        A fitted threshold (any family).
+    joints : sequence of int, optional
+        Joints to monitor (1-based); by default those of the threshold.
+    min_duration : float
+        Events shorter than this (``end - start``) are dropped [s], >= 0.
+    hold : float
+        Events separated by less than this are merged [s], >= 0.
+    """
+
+    def __init__(
+        self,
+        threshold: Threshold,
+        joints: Any = None,
+        min_duration: float = 0.0,
+        hold: float = 0.0,
+    ) -> None:
+        if not isinstance(threshold, Threshold):
+            raise TypeError(
+                f"threshold must be a Threshold (e.g. ConstantThreshold); got "
+                f"{type(threshold).__name__}"
+            )
+        self.threshold = threshold
+        self.joints = joints
+        self.min_duration = check_seconds(min_duration, "min_duration")
+        self.hold = check_seconds(hold, "hold")
+
+    def __repr__(self) -> str:
+        return (
+            f"Detector({self.threshold!r}, joints={self.joints!r}, "
+            f"min_duration={self.min_duration!r}, hold={self.hold!r})"
+        )
+
+    @property
+    def monitored_joints(self) -> tuple[int, ...]:
+        """Monitored joints, 1-based (needs a fitted threshold)."""
+        fitted = self.threshold.monitored_joints_  # raises NotFittedError before fit
+        return fitted if self.joints is None else check_joints(self.joints, self.threshold.n_dof_)
+
+    # ----------------------------------------------------------------- events
+
+    def _close(self, event: _OpenEvent | None) -> Event | None:
+        if event is None or event.end - event.start < self.min_duration:
+            return None
+        return Event(
+            start=event.start,
+            end=event.end,
+            joints=event.joints,
+            peak=event.peak,
+            peak_residual=event.peak_residual,
+            method=self.threshold.name,
+        )
+
+    def _group(self, t: FloatArray, excursion: FloatArray, residual: FloatArray) -> list[Event]:
+        """Events of accepted samples; ``excursion`` and ``residual`` of monitored joints."""
+        joints = np.asarray(self.monitored_joints)
+        outside = excursion > 0.0
+        rows = np.flatnonzero(outside.any(axis=1))
+        if rows.size == 0:
+            return []
+        breaks = np.flatnonzero(np.diff(rows) > 1)
+        starts = np.concatenate([rows[:1], rows[breaks + 1]])
+        ends = np.concatenate([rows[breaks], rows[-1:]])
+        events: list[Event] = []
+        current: _OpenEvent | None = None
+        for first, last in zip(starts, ends, strict=True):
+            segment = excursion[first : last + 1]
+            row, col = np.unravel_index(int(np.argmax(segment)), segment.shape)
+            run = _OpenEvent(
+                start=float(t[first]),
+                end=float(t[last]),
+                joints=tuple(int(j) for j in joints[outside[first : last + 1].any(axis=0)]),
+                peak=float(segment[row, col]),
+                peak_residual=float(residual[first + row, col]),
+            )
+            if current is not None and run.start - current.end < self.hold:
+                current = current.merged(run)
+                continue
+            closed = self._close(current)
+            if closed is not None:
+                events.append(closed)
+            current = run
+        closed = self._close(current)
+        if closed is not None:
+            events.append(closed)
+        return events
+
+    # ----------------------------------------------------------------- batch
+
+    def run(self, signals: ObserverSignals, *, skip_nonfinite: bool = False) -> DetectionResult:
+        """Bounds, outside samples and events over a recorded run.
+
+        Parameters
+        ----------
+        signals : ObserverSignals
+            Run of the robot, signal kind and gain the threshold was fitted for.
+        skip_nonfinite : bool
+            Skip samples with NaN/inf or a time that does not increase, as
+            :meth:`step` does; by default they are an error.
+
+        Returns
+        -------
+        DetectionResult
+        """
+        threshold = self.threshold
+        threshold.check_signals(signals)
+        valid = _valid_samples(signals)
+        if not skip_nonfinite and not valid.all():
+            raise InputValueError(_describe_invalid(signals, valid))
+        cols = np.asarray(self.monitored_joints) - 1
+        shape = signals.residual.shape
+        lower = np.full(shape, np.nan)
+        upper = np.full(shape, np.nan)
+        rows = np.flatnonzero(valid)
+        dt = threshold.dt_
+        if valid.all() and rows.size:
+            dt = threshold.sample_period(signals)
+        elif rows.size > 1:
+            dt = float(np.median(np.diff(signals.t[rows])))
+        if rows.size:
+            h, f, sg, v = (
+                getattr(signals, name)[rows]
+                for name in ("model_torque", "friction", "sign", "velocity")
+            )
+            q, qdd = (
+                None if getattr(signals, name) is None else getattr(signals, name)[rows]
+                for name in ("position", "acceleration")
+            )
+            state = threshold.initial_state(
+                h[0],
+                f[0],
+                sg[0],
+                v[0],
+                position=None if q is None else q[0],
+                acceleration=None if qdd is None else qdd[0],
+                dt=dt,
+            )
+            lower[rows], upper[rows], _ = threshold.process(
+                state, h, f, sg, v, position=q, acceleration=qdd
+            )
+        excursion = _excursion(signals.residual, lower, upper)[:, cols]
+        outside = np.zeros(shape, dtype=bool)
+        outside[:, cols] = excursion > 0.0
+        events = self._group(signals.t[valid], excursion[valid], signals.residual[valid][:, cols])
+        return DetectionResult(
+            t=signals.t,
+            residual=signals.residual,
+            lower=lower,
+            upper=upper,
+            outside=outside,
+            valid=valid,
+            events=events,
+            method=threshold.name,
+            joints=self.monitored_joints,
+            dt=dt,
+        )
+
+    def detect(self, signals: ObserverSignals, *, skip_nonfinite: bool = False) -> list[Event]:
+        """Events of a recorded run (:meth:`run` without the per-sample arrays)."""
+        return self.run(signals, skip_nonfinite=skip_nonfinite).events
+
+    # ----------------------------------------------------------------- streaming
+
+    def initial_state(self, dt: float | None = None) -> DetectorState:
+        """State before the first sample of a stream.
+
+        Parameters
+        ----------
+        dt : float, optional
+            Sample period of the stream [s]; by default ``dt_`` of the
+            threshold's fit runs. The threshold's filters start at the first
+            accepted sample, held since forever.
+        """
+        _ = self.monitored_joints  # raises NotFittedError or a joints error before the stream
+        period = check_dt(self.threshold.dt_ if dt is None else dt)
+        return DetectorState(dt=period)
+
+    def step(
+        self,
+        state: DetectorState,
+        residual: ArrayLike,
+        model_torque: ArrayLike,
+        friction: ArrayLike,
+        sign: ArrayLike,
+        velocity: ArrayLike,
+        t: float,
+        *,
+        position: ArrayLike | None = None,
+        acceleration: ArrayLike | None = None,
+    ) -> tuple[Verdict, DetectorState]:
+        """Judge one sample of a stream.
+
+        Parameters
+        ----------
+        state : DetectorState
+            From :meth:`initial_state` or the previous call.
+        residual : array-like of shape (n_dof,)
+            Residual r̂ [N m].
+        model_torque, friction, sign, velocity : array-like of shape (n_dof,)
+            h [N m], K_I/(s+K_I)·τ̂_fr [N m], K_I/(s+K_I)·sign(q̇) [-], q̇ [rad/s].
+        t : float
+            Time of the sample [s].
+        position, acceleration : array-like of shape (n_dof,), optional
+            q [rad] and q̈ [rad/s²], for thresholds that use them.
+
+        Returns
+        -------
+        verdict : Verdict
+        state : DetectorState
+            State for the next sample (the same object after a fault).
+
+        Raises
+        ------
+        DimensionError
+            An input of the wrong shape (a programming error, not a data fault).
+        """
+        if not isinstance(state, DetectorState):
+            raise TypeError(
+                f"state must be a DetectorState from initial_state or step; "
+                f"got {type(state).__name__}"
+            )
+        n_dof = self.threshold.n_dof_
+        r = _one_sample(residual, n_dof, "residual")
+        named = {
+            "model_torque": model_torque,
+            "friction": friction,
+            "sign": sign,
+            "velocity": velocity,
+            "position": position,
+            "acceleration": acceleration,
+        }
+        inputs: dict[str, Any] = {
+            k: None if v is None else _one_sample(v, n_dof, k) for k, v in named.items()
+        }
+        time = _as_time(t)
+        fault = _fault({"residual": r, **inputs}, time, state.t)
+        if fault:
+            nan = np.full(n_dof, np.nan)
+            return Verdict("fault", time, (), r, nan, nan.copy(), None, fault), state
+
+        threshold_state = state.threshold
+        if threshold_state is None:
+            threshold_state = self.threshold.initial_state(**inputs, dt=state.dt)
+        lower, upper, threshold_state = self.threshold.step(threshold_state, **inputs)
+        cols = np.asarray(self.monitored_joints) - 1
+        excursion = _excursion(r, lower, upper)[cols]
+        out = excursion > 0.0
+        joints = tuple(int(j) for j in cols[out] + 1)
+
+        ended: Event | None = None
+        current = state.open_event
+        if joints:
+            k = int(np.argmax(excursion))
+            sample = _OpenEvent(time, time, joints, float(excursion[k]), float(r[cols[k]]))
+            if current is not None and (state.outside or time - current.end < self.hold):
+                current = current.merged(sample)
+            else:
+                ended = self._close(current)
+                current = sample
+        elif current is not None and time - current.end >= self.hold:
+            ended = self._close(current)
+            current = None
+        confirmed = (
+            bool(joints) and current is not None and time - current.start >= self.min_duration
+        )
+        verdict = Verdict("collision" if confirmed else "ok", time, joints, r, lower, upper, ended)
+        return verdict, DetectorState(state.dt, threshold_state, time, bool(joints), current)
+
+    def finish(self, state: DetectorState) -> tuple[Event | None, DetectorState]:
+        """Close the event in progress at the end of a stream.
+
+        Returns
+        -------
+        event : Event or None
+            The open event (None if there is none or it is shorter than ``min_duration``).
+        state : DetectorState
+            State without an open event.
+        """
+        if not isinstance(state, DetectorState):
+            raise TypeError(f"state must be a DetectorState; got {type(state).__name__}")
+        event = self._close(state.open_event)
+        return event, DetectorState(state.dt, state.threshold, state.t, False, None)
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _valid_samples(signals: ObserverSignals) -> BoolArray:
+    """Samples a stream would accept: all inputs finite and time past every earlier one."""
+    finite = np.isfinite(signals.t)
+    for name in (*_STREAM_INPUTS, "position", "acceleration"):
+        values = getattr(signals, name)
+        if values is not None:
+            finite &= np.isfinite(values).all(axis=1)
+    times = np.where(finite, signals.t, -np.inf)
+    latest = np.concatenate([[-np.inf], np.maximum.accumulate(times)[:-1]])
+    return np.asarray(finite & (signals.t > latest))
+
+
+def _describe_invalid(signals: ObserverSignals, valid: BoolArray) -> str:
+    k = int(np.flatnonzero(~valid)[0])
+    hint = "; pass skip_nonfinite=True to skip such samples as the streaming detector does"
+    if not np.isfinite(signals.t[k]):
+        return f"t[{k}] is {signals.t[k]}{hint}"
+    for name in (*_STREAM_INPUTS, "position", "acceleration"):
+        values = getattr(signals, name)
+        if values is not None and not np.isfinite(values[k]).all():
+            j = int(np.flatnonzero(~np.isfinite(values[k]))[0])
+            return f"{name} is {values[k, j]} at sample {k}, joint {j + 1}{hint}"
+    return (
+        f"t must be strictly increasing; t[{k}] = {signals.t[k]!r} s is not past the earlier{hint}"
+    )
+
+
+def _one_sample(value: ArrayLike, n_dof: int, name: str) -> FloatArray:
+    arr, single = as_joint_array(value, n_dof, name, allow_nonfinite=True)
+    if not single:
+        raise DimensionError(
+            f"step takes one sample: {name} of shape ({n_dof},); got shape {np.shape(value)}"
+        )
+    return arr[0]
+
+
+def _as_time(t: Any) -> float:
+    try:
+        return float(t)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def _fault(rows: dict[str, FloatArray | None], t: float, last: float) -> str:
+    """Why a sample must be skipped, or "" if it is fine."""
+    if not math.isfinite(t):
+        return f"time t = {t} is not finite"
+    for name, row in rows.items():
+        if row is not None and not np.isfinite(row).all():
+            j = int(np.flatnonzero(~np.isfinite(row))[0])
+            return f"{name} is {row[j]} at joint {j + 1}"
+    if t <= last:
+        return f"time t = {t!r} s does not increase past the last accepted sample ({last!r} s)"
+    return ""

@@ -1,0 +1,153 @@
+"""Time-variant thresholds b_2H, b_2L of eq. (5.33) and their hysteretic form, eq. (5.39).
+
+With h(t) = K_I/(s+K_I)·(M q̈ + C q̇ + g) of the nominal model (eq. 5.30) and
+the filtered nominal friction f(t) = K_I/(s+K_I)·τ̂_fr, eq. (5.33) bounds the
+residual of joint j by
+
+    b_2L,j(t) = -α_j + γ_j h_j(t) + ε_fr,j f_j(t)
+    b_2H,j(t) = +α_j + γ_j h_j(t) + ε_fr,j f_j(t).
+
+On a robot whose friction error is hysteretic rather than proportional to
+the nominal friction (eq. 5.38, KUKA LWR), the friction term becomes
+-C_j·K_I/(s+K_I)·sign(q̇_j) (eq. 5.39, ``form="hysteretic"``).
+
+Fit (section 5.3.3, "tuned experimentally by having the robot follow few
+different trajectories"): for every joint, γ and ε_fr (or C) are the least
+squares solution of r̂ ≈ γ h + ε_fr f (or r̂ ≈ γ h - C·sign) over the samples
+of all fit runs, and α is the largest remaining |r̂ - γ h - ε_fr f|, plus
+``margin``. ``beta_`` is the constant threshold of eq. (5.32) on the same
+samples, so that ``efficiency_ = alpha_ / beta_`` is the eff of Table 5.7
+(smaller is better).
+
+Examples
+--------
+>>> import numpy as np
+>>> from sensorless.signals import ObserverSignals
+>>> t = np.arange(200) * 1e-3
+>>> h = np.sin(7 * t)[:, None]
+>>> f = np.cos(3 * t)[:, None]
+>>> r = -0.05 * h + 0.3 * f + 0.01 * np.sign(np.sin(50 * t))[:, None]
+>>> z = np.zeros_like(r)
+>>> run = ObserverSignals(t, r, h, f, z, z, gain=20.0, robot="demo")
+>>> th = TimeVariantThreshold().fit(run)
+>>> bool(th.alpha_[0] < th.beta_[0])
+True
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .._validation import FloatArray
+from ..exceptions import InputValueError
+from ..signals import ObserverSignals
+from .base import BoolArray, Threshold, ThresholdInputs, ThresholdState, rounding_guard, stack
+
+__all__ = ["FORMS", "TimeVariantThreshold"]
+
+FORMS = ("friction", "hysteretic")
+"""Forms of the friction term: ε_fr·filtered friction (eq. 5.33), -C·filtered sign (eq. 5.39)."""
+
+
+class TimeVariantThreshold(Threshold):
+    """Bounds ±α + γ h + ε_fr·K_I/(s+K_I)τ̂_fr (eq. 5.33) or ±α + γ h - C·K_I/(s+K_I)sign q̇ (5.39).
+
+    Parameters
+    ----------
+    margin : float or array-like of shape (n_dof,)
+        Added to α (and to β) [N m], >= 0.
+    form : {"friction", "hysteretic"}
+        Friction term of eq. (5.33) or of eq. (5.39).
+    joints : sequence of int, optional
+        Monitored joints (1-based); None for all.
+    transient : float
+        Time skipped at the start of every fit run [s] (e.g. a few 1/K_I).
+
+    Attributes
+    ----------
+    alpha_ : ndarray of shape (n_dof,)
+        Constant half-width α [N m] (includes ``margin``).
+    gamma_ : ndarray of shape (n_dof,)
+        Coefficient γ of h [-].
+    eps_fr_ : ndarray of shape (n_dof,)
+        Coefficient ε_fr of the filtered friction [-] (``form="friction"``).
+    c_ : ndarray of shape (n_dof,)
+        Coefficient C of the filtered sign [N m] (``form="hysteretic"``).
+    beta_ : ndarray of shape (n_dof,)
+        Constant threshold β of eq. (5.32) on the same samples [N m] (includes ``margin``).
+    """
+
+    name = "time_variant"
+
+    alpha_: FloatArray
+    gamma_: FloatArray
+    eps_fr_: FloatArray
+    c_: FloatArray
+    beta_: FloatArray
+
+    def __init__(
+        self,
+        margin: Any = 0.0,
+        form: str = "friction",
+        *,
+        joints: Any = None,
+        transient: float = 0.0,
+    ) -> None:
+        self.margin = margin
+        self.form = form
+        self.joints = joints
+        self.transient = transient
+
+    @property
+    def efficiency_(self) -> FloatArray:
+        """eff = α/β per joint (Table 5.7) [-]; smaller means a tighter threshold."""
+        self._check_fitted()
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.asarray(self.alpha_ / self.beta_)
+
+    def _check_form(self) -> str:
+        if self.form not in FORMS:
+            raise InputValueError(f"form must be one of {list(FORMS)}; got {self.form!r}")
+        return str(self.form)
+
+    def _coefficient_name(self) -> str:
+        return "eps_fr_" if self._check_form() == "friction" else "c_"
+
+    def _attribute_names(self) -> tuple[str, ...]:
+        return ("alpha_", "gamma_", self._coefficient_name(), "beta_")
+
+    def _centre(
+        self, gamma: FloatArray, coefficient: FloatArray, inputs: ThresholdInputs
+    ) -> FloatArray:
+        """b_2V(t) = γ h + ε_fr f (eq. 5.29) or γ h - C·sign (eq. 5.39)."""
+        if self._check_form() == "friction":
+            return gamma * inputs.model_torque + coefficient * inputs.friction
+        return gamma * inputs.model_torque - coefficient * inputs.sign
+
+    def _fit(self, runs: list[ObserverSignals], keep: list[BoolArray], margin: FloatArray) -> None:
+        form = self._check_form()
+        residual = stack(runs, keep, "residual")
+        inputs = ThresholdInputs(*(stack(runs, keep, name) for name in ThresholdInputs._fields[:4]))
+        # The hysteretic term enters with a minus sign: regress on -sign to get C directly.
+        second = inputs.friction if form == "friction" else -inputs.sign
+        n_dof = residual.shape[1]
+        gamma = np.empty(n_dof)
+        coefficient = np.empty(n_dof)
+        for j in range(n_dof):
+            design = np.column_stack([inputs.model_torque[:, j], second[:, j]])
+            solution = np.linalg.lstsq(design, residual[:, j], rcond=None)[0]
+            gamma[j], coefficient[j] = solution
+        centre = self._centre(gamma, coefficient, inputs)
+        error = residual - centre
+        self.gamma_ = gamma
+        setattr(self, self._coefficient_name(), coefficient)
+        self.alpha_ = np.max(np.abs(error), axis=0) + margin + rounding_guard(residual, centre)
+        self.beta_ = np.max(np.abs(residual), axis=0) + margin
+
+    def _run(
+        self, state: ThresholdState, inputs: ThresholdInputs
+    ) -> tuple[FloatArray, FloatArray, ThresholdState]:
+        centre = self._centre(self.gamma_, getattr(self, self._coefficient_name()), inputs)
+        return centre - self.alpha_, centre + self.alpha_, state

@@ -734,13 +734,11 @@ class RobotModel:
         source = (np.arange(n)[:, None] * 10 + _PIN_TO_THESIS).ravel()
         rows = np.arange(n)
         model, data = self.pinocchio_model, self._data
-        pinocchio_order = np.empty((qs.shape[0], n, 10 * n))
+        armature = rows * N_LINK_PARAMETERS + 10
         for k in range(qs.shape[0]):
-            pinocchio_order[k] = pin.computeJointTorqueRegressor(
-                model, data, qs[k], qds[k], qdds[k]
-            )
-        out[:, :, inertial] = pinocchio_order[:, :, source]
-        out[:, rows, rows * N_LINK_PARAMETERS + 10] = qdds
+            y10 = pin.computeJointTorqueRegressor(model, data, qs[k], qds[k], qdds[k])
+            out[k][:, inertial] = y10[:, source]
+            out[k][rows, armature] = qdds[k]
 
     def regressor_terms(self, q: ArrayLike) -> FloatArray:
         """Split regressor Y_k^q(q) of eq. 3.10–3.12: Y(q, q̇, q̈) = Σ_k Y_k^q(q) Q_k.

@@ -794,3 +794,25 @@ def test_missing_or_broken_urdf(tmp_path: Path) -> None:
     broken.write_text("<robot name='x'><link name='a'>")
     with pytest.raises(ModelError, match="cannot parse URDF"):
         sl.RobotModel.from_urdf(broken)
+
+
+def test_puma560_matches_the_robotics_toolbox_published_output() -> None:
+    """Corke's Robotics Toolbox for MATLAB, ``mdl_puma560``, at q = (1, 2, 3, 4, 5, 6) rad.
+
+    ``p560.gravload(q)`` and ``p560.inertia(q)`` as printed (4 decimals) in the
+    toolbox's documentation examples: an independent implementation of the same
+    parameter set (armature included).
+    """
+    robot = sl.robots.load("puma560")
+    q = np.arange(1.0, 7.0)
+    gravload = [0.0000, -7.9683, 8.4581, -0.0197, 0.0027, 0.0]
+    inertia = [
+        [2.6152, -0.6550, -0.0363, 0.0001, 0.0010, 0.0000],
+        [-0.6550, 4.3038, 0.2953, -0.0008, -0.0017, 0.0000],
+        [-0.0363, 0.2953, 0.9366, -0.0009, -0.0006, 0.0000],
+        [0.0001, -0.0008, -0.0009, 0.1926, 0.0000, 0.0000],
+        [0.0010, -0.0017, -0.0006, 0.0000, 0.1713, 0.0000],
+        [0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.1941],
+    ]
+    np.testing.assert_allclose(robot.gravity(q), gravload, atol=5e-5)
+    np.testing.assert_allclose(robot.mass_matrix(q), inertia, atol=5e-5)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import itertools
 
 import numpy as np
 import pinocchio as pin
@@ -68,7 +69,7 @@ def test_constant_external_force_does_the_work_of_the_energy_change() -> None:
     # The contact torque is held over each period, so its work there is exactly τ_c·Δq.
     work = sum(
         tau_c(before.q) @ (after.q - before.q)
-        for before, after in zip(states[:-1], states[1:], strict=True)
+        for before, after in itertools.pairwise(states)
     )
     change = energy(robot, states[-1].q, states[-1].qd) - energy(robot, states[0].q, states[0].qd)
     assert abs(work) > 1.0
@@ -166,7 +167,9 @@ def test_logged_contact_torque_is_jacobian_transpose_force() -> None:
 def test_contact_on_a_link_leaves_later_joints_untouched() -> None:
     robot = sl.robots.load("panda_gaz")
     contact = Contact(1, 3, (0.05, 0.0, 0.02), (1.0, 0.5, -0.2), Push(0.2, 0.1, 0.3, 0.1, 40.0))
-    trajectory = QuinticViaPoints([0.0, 1.0], np.tile([0.0, -0.5, 0.0, -2.0, 0.0, 1.5, 0.7], (2, 1)))
+    trajectory = QuinticViaPoints(
+        [0.0, 1.0], np.tile([0.0, -0.5, 0.0, -2.0, 0.0, 1.5, 0.7], (2, 1))
+    )
     controller = JointPID(kp=np.full(7, 200.0), ki=0.0, kd=np.full(7, 5.0), model=robot)
     result = simulate(
         RigidPlant(robot), controller, trajectory, 1.0, contacts=ContactSet([contact])
@@ -212,7 +215,9 @@ def test_torque_feedback_loop_runs_and_reads_joint_torque() -> None:
     controller = JointPID(kp=np.full(7, 100.0), ki=0.0, kd=np.full(7, 5.0), model=robot)
     result = simulate(plant, controller, trajectory, 1.0)
     # Standing still under gravity, the torque sensors carry the gravity torque.
-    np.testing.assert_allclose(result.log.tau_j[-1], robot.gravity(result.log.q_true[-1]), atol=0.05)
+    np.testing.assert_allclose(
+        result.log.tau_j[-1], robot.gravity(result.log.q_true[-1]), atol=0.05
+    )
 
 
 def test_bad_simulation_inputs_are_rejected() -> None:

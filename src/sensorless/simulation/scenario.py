@@ -35,7 +35,7 @@ from ..robots import load as load_robot
 from ..robots.model import RobotModel
 from ..trajectories import QuinticViaPoints, RandomPointToPoint, Trajectory
 from .collisions import Contact, ContactSet, HalfSine, Push, Recorded
-from .controllers import JointPID
+from .controllers import ComputedTorque, JointPID
 from .model_error import perturb
 from .plants import FlexiblePlant, Friction, RigidPlant, TorqueFeedback
 from .sensors import SensorModel
@@ -305,6 +305,16 @@ def _trajectory(
 
 def _controller(spec: Mapping[str, Any], nominal: RobotModel, trajectory: Trajectory) -> JointPID:
     options = {k: v for k, v in spec.items() if k not in ("type", "bandwidth", "damping_ratio")}
+    kind = spec.get("type", "pid")
+    if kind == "computed_torque":
+        omega = float(spec.get("bandwidth", 20.0))
+        zeta = float(spec.get("damping_ratio", 1.0))
+        options.setdefault("kp", omega**2)
+        options.setdefault("kd", 2 * zeta * omega)
+        options.setdefault("ki", 0.0)
+        return ComputedTorque(model=nominal, **options)
+    if kind != "pid":
+        raise ModelError(f"unknown controller type {kind!r}; options: pid, computed_torque")
     if "bandwidth" in spec:
         # Gains from the nominal inertia at the start pose: kp = J ω², kd = 2 ζ J ω.
         q0 = trajectory.evaluate(0.0)[0]

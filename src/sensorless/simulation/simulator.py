@@ -127,7 +127,7 @@ def simulate(
     )
     n_samples = round(duration / period) + 1
     t = np.arange(n_samples, dtype=np.float64) * np.float64(period)
-    q_des, qd_des, _ = trajectory.evaluate(t)
+    q_des, qd_des, qdd_des = trajectory.evaluate(t)
 
     state = plant.initial_state(q_des[0])
     n_sub = plant.substeps(period, q_des[0]) if substeps is None else int(substeps)
@@ -148,7 +148,7 @@ def simulate(
     no_contact = np.zeros(n)
     for k in range(n_samples):
         q_meas[k] = sensors.measure_position(state.q, position_rng)
-        command[k], ctrl = controller.step(ctrl, q_meas[k], q_des[k], qd_des[k], period)
+        command[k], ctrl = controller.step(ctrl, q_meas[k], q_des[k], qd_des[k], period, qdd_des[k])
         contact = no_contact
         if any(start <= t[k] <= end for start, end in windows):
             contact = contacts.joint_torque(plant.robot, state.q, t[k])

@@ -68,8 +68,7 @@ def test_constant_external_force_does_the_work_of_the_energy_change() -> None:
     states = free_motion(plant, q0, steps=3000, substeps=4, tau_c=tau_c)
     # The contact torque is held over each period, so its work there is exactly τ_c·Δq.
     work = sum(
-        tau_c(before.q) @ (after.q - before.q)
-        for before, after in itertools.pairwise(states)
+        tau_c(before.q) @ (after.q - before.q) for before, after in itertools.pairwise(states)
     )
     change = energy(robot, states[-1].q, states[-1].qd) - energy(robot, states[0].q, states[0].qd)
     assert abs(work) > 1.0

@@ -489,3 +489,28 @@ def test_stream_input_errors() -> None:
         th.step("state", *rows)  # type: ignore[arg-type]
     with pytest.raises(InputValueError, match="must be finite"):
         th.step(state, rows[0], rows[1], rows[2], np.full(N_DOF, np.nan))
+
+
+def test_minimax_fit_gives_the_narrowest_band() -> None:
+    """The L∞ fit recovers planted γ, ε_fr and never has a wider band than LS or β."""
+    rng = np.random.default_rng(4)
+    t = np.arange(4000) * 1e-3
+    h = np.column_stack([np.sin(3 * t), np.cos(2 * t)]) * 10
+    f = np.column_stack([np.cos(5 * t), np.sin(7 * t)]) * 2
+    noise = rng.uniform(-0.3, 0.3, h.shape) + 0.2 * np.sign(np.sin(11 * t))[:, None]
+    r = np.array([0.05, -0.1]) * h + np.array([0.4, 0.8]) * f + noise
+    zeros = np.zeros_like(r)
+    run = ObserverSignals(t, r, h, f, zeros, zeros, gain=20.0, robot="demo")
+    exact = TimeVariantThreshold(fit_method="minimax").fit(
+        ObserverSignals(t, r - noise, h, f, zeros, zeros, gain=20.0, robot="demo")
+    )
+    np.testing.assert_allclose(exact.gamma_, [0.05, -0.1], atol=1e-7)
+    np.testing.assert_allclose(exact.eps_fr_, [0.4, 0.8], atol=1e-7)
+    minimax = TimeVariantThreshold(fit_method="minimax").fit(run)
+    least = TimeVariantThreshold().fit(run)
+    assert np.all(minimax.alpha_ <= least.alpha_ + 1e-9)
+    assert np.all(minimax.alpha_ <= minimax.beta_)
+    # The planted coefficients are feasible with α = max|noise|: the optimum is no wider.
+    assert np.all(minimax.alpha_ <= np.abs(noise).max(axis=0) + 1e-9)
+    with pytest.raises(InputValueError, match="fit_method must be one of"):
+        TimeVariantThreshold(fit_method="l1").fit(run)

@@ -6,22 +6,50 @@ with time along axis 0.
 
 from __future__ import annotations
 
-from . import exceptions, friction, robots
+__version__ = "0.1.0"
+
+from . import (
+    detection,
+    evaluation,
+    exceptions,
+    filters,
+    friction,
+    io,
+    observers,
+    robots,
+    thresholds,
+    trajectories,
+)
 from .exceptions import SensorlessError
+from .io import Log, read_log, write_log
+from .monitor import CollisionMonitor, ObserverSettings, load_tuned, save_tuned, tune
 from .robots import LinkInertia, MotorData, RobotModel
 from .robots.base_parameters import BaseParameters, base_parameters
 
-__version__ = "0.1.0"
-
 __all__ = [
     "BaseParameters",
+    "CollisionMonitor",
     "LinkInertia",
+    "Log",
     "MotorData",
+    "ObserverSettings",
     "RobotModel",
     "SensorlessError",
     "__version__",
     "base_parameters",
+    "detection",
+    "evaluation",
     "exceptions",
+    "filters",
     "friction",
+    "io",
+    "load_tuned",
+    "observers",
+    "read_log",
     "robots",
+    "save_tuned",
+    "thresholds",
+    "trajectories",
+    "tune",
+    "write_log",
 ]

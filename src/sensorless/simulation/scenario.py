@@ -115,6 +115,15 @@ class Scenario:
         """Default run seed."""
         return int(self.spec.get("seed", 0))
 
+    def with_duration(self, seconds: float) -> Scenario:
+        """The same scenario cut (or extended) to ``seconds`` [s]; random contacts scale along."""
+        spec = copy.deepcopy(self.spec)
+        spec["duration"] = float(seconds)
+        if "random_collisions" in spec:
+            count = int(spec["random_collisions"]["count"])
+            spec["random_collisions"]["count"] = max(1, round(count * seconds / self.duration))
+        return Scenario(self.name, spec)
+
     def robots(self) -> tuple[RobotModel, RobotModel]:
         """The true robot (with its true friction) and the nominal model the user has."""
         true = load_robot(self.spec["robot"])

@@ -12,6 +12,7 @@ family                 name                   thesis
 ConstantThreshold      ``"constant"``         ±β, eq. (5.32)
 TimeVariantThreshold   ``"time_variant"``     ±α + γ h + ε_fr f, eq. (5.33); -C·sign, (5.39)
 VelocityThreshold      ``"velocity"``         LT/UT of eq. (4.35)-(4.39), fit eq. (4.45)
+ModelBasedThreshold    ``"model_based"``      ±B_c(t) of eq. (3.36) for τ̂_c (eq. 3.16)
 =====================  =====================  ==========================================
 """
 
@@ -27,14 +28,14 @@ from .base import (
     load_threshold,
 )
 from .constant import ConstantThreshold
+from .model_based import ModelBasedThreshold
 from .time_variant import TimeVariantThreshold
 from .velocity import VelocityThreshold
-
-# Model-based thresholds (model_based.py) are added here by the lead.
 
 __all__ = [
     "METHODS",
     "ConstantThreshold",
+    "ModelBasedThreshold",
     "Threshold",
     "ThresholdInputs",
     "ThresholdState",

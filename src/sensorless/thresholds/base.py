@@ -338,7 +338,7 @@ def _check_runs(runs: list[ObserverSignals]) -> None:
                 f"all fit runs must be of one signal kind; run 0 is {first.kind!r}, "
                 f"{what} is {run.kind!r}"
             )
-        if not np.allclose(run.gain, first.gain, rtol=1e-9, atol=0.0):
+        if not np.allclose(run.gain, first.gain, rtol=1e-9, atol=0.0, equal_nan=True):
             raise InputValueError(
                 f"all fit runs must use one observer gain K_I; run 0 has {first.gain.tolist()}, "
                 f"{what} has {run.gain.tolist()} [1/s]"
@@ -583,7 +583,7 @@ class Threshold(abc.ABC):
                 f"thresholds fitted on {self.kind_!r} signals; these signals are "
                 f"{signals.kind!r} (valid: the kind used for fit)"
             )
-        if not np.allclose(signals.gain, self.gain_, rtol=1e-9, atol=0.0):
+        if not np.allclose(signals.gain, self.gain_, rtol=1e-9, atol=0.0, equal_nan=True):
             raise InputValueError(
                 f"thresholds fitted for observer gain K_I = {self.gain_.tolist()} [1/s]; "
                 f"signals use K_I = {signals.gain.tolist()}"

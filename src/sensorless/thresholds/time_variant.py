@@ -15,8 +15,14 @@ Fit (section 5.3.3, "tuned experimentally by having the robot follow few
 different trajectories"): for every joint, γ and ε_fr (or C) are the least
 squares solution of r̂ ≈ γ h + ε_fr f (or r̂ ≈ γ h - C·sign) over the samples
 of all fit runs, and α is the largest remaining |r̂ - γ h - ε_fr f|, plus
-``margin``. ``beta_`` is the constant threshold of eq. (5.32) on the same
-samples, so that ``efficiency_ = alpha_ / beta_`` is the eff of Table 5.7
+``margin``. Since α, not the squared error, is the width of the band,
+``fit_method="minimax"`` goes past the thesis: γ, ε_fr and α solve the
+Chebyshev (L∞) problem min α s.t. |r̂ - γ h - ε_fr f| ≤ α as a linear program
+(scipy.optimize.linprog, HiGHS) on at most ``max_lp_samples`` evenly spaced
+samples per joint; α is then recomputed on every sample. γ = ε_fr = 0 is
+feasible, so on the fitted samples the minimax α never exceeds β.
+``beta_`` is the constant threshold of eq. (5.32) on the same samples, so that
+``efficiency_ = alpha_ / beta_`` is the eff of Table 5.7
 (smaller is better).
 
 Examples
@@ -39,6 +45,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from scipy.optimize import linprog
 
 from .._validation import FloatArray
 from ..exceptions import InputValueError
@@ -47,6 +54,7 @@ from .base import BoolArray, Threshold, ThresholdInputs, ThresholdState, roundin
 
 __all__ = ["FORMS", "TimeVariantThreshold"]
 
+FIT_METHODS = ("least_squares", "minimax")
 FORMS = ("friction", "hysteretic")
 """Forms of the friction term: ε_fr·filtered friction (eq. 5.33), -C·filtered sign (eq. 5.39)."""
 
@@ -64,6 +72,10 @@ class TimeVariantThreshold(Threshold):
         Monitored joints (1-based); None for all.
     transient : float
         Time skipped at the start of every fit run [s] (e.g. a few 1/K_I).
+    fit_method : {"least_squares", "minimax"}
+        How γ and ε_fr (or C) are fitted (see the module docstring).
+    max_lp_samples : int
+        Samples per joint the minimax linear program uses at most.
 
     Attributes
     ----------
@@ -94,11 +106,15 @@ class TimeVariantThreshold(Threshold):
         *,
         joints: Any = None,
         transient: float = 0.0,
+        fit_method: str = "least_squares",
+        max_lp_samples: int = 20_000,
     ) -> None:
         self.margin = margin
         self.form = form
         self.joints = joints
         self.transient = transient
+        self.fit_method = fit_method
+        self.max_lp_samples = max_lp_samples
 
     @property
     def efficiency_(self) -> FloatArray:
@@ -135,10 +151,17 @@ class TimeVariantThreshold(Threshold):
         n_dof = residual.shape[1]
         gamma = np.empty(n_dof)
         coefficient = np.empty(n_dof)
+        if self.fit_method not in FIT_METHODS:
+            raise InputValueError(
+                f"fit_method must be one of {list(FIT_METHODS)}; got {self.fit_method!r}"
+            )
         for j in range(n_dof):
             design = np.column_stack([inputs.model_torque[:, j], second[:, j]])
-            solution = np.linalg.lstsq(design, residual[:, j], rcond=None)[0]
-            gamma[j], coefficient[j] = solution
+            if self.fit_method == "minimax":
+                gamma[j], coefficient[j] = _chebyshev(design, residual[:, j], self.max_lp_samples)
+            else:
+                solution = np.linalg.lstsq(design, residual[:, j], rcond=None)[0]
+                gamma[j], coefficient[j] = solution
         centre = self._centre(gamma, coefficient, inputs)
         error = residual - centre
         self.gamma_ = gamma
@@ -151,3 +174,22 @@ class TimeVariantThreshold(Threshold):
     ) -> tuple[FloatArray, FloatArray, ThresholdState]:
         centre = self._centre(self.gamma_, getattr(self, self._coefficient_name()), inputs)
         return centre - self.alpha_, centre + self.alpha_, state
+
+
+def _chebyshev(design: FloatArray, target: FloatArray, max_samples: int) -> FloatArray:
+    """Coefficients x minimising max |target - design x| (L∞ fit) by linear programming."""
+    if max_samples < design.shape[1] + 1:
+        raise InputValueError(f"max_lp_samples must exceed {design.shape[1]}; got {max_samples}")
+    step = max(1, int(np.ceil(design.shape[0] / max_samples)))
+    a, b = design[::step], target[::step]
+    ones = np.ones((a.shape[0], 1))
+    # Variables (x, α): minimise α subject to ±(b - a x) ≤ α.
+    a_ub = np.vstack([np.hstack([-a, -ones]), np.hstack([a, -ones])])
+    b_ub = np.concatenate([-b, b])
+    cost = np.zeros(a.shape[1] + 1)
+    cost[-1] = 1.0
+    bounds = [(None, None)] * a.shape[1] + [(0.0, None)]
+    result = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=bounds, method="highs")
+    if not result.success:
+        raise InputValueError(f"minimax fit failed: {result.message}")
+    return np.asarray(result.x[:-1])

@@ -376,3 +376,19 @@ def test_empty_chunk_with_state_is_a_no_op() -> None:
     y, same = est.filter(np.zeros((0, 2)), state)
     assert y.velocity.shape == (0, 2)
     assert same is state
+
+
+@pytest.mark.parametrize("est", CAUSAL)
+def test_step_outputs_computes_only_the_selected_outputs(est: CausalEstimator) -> None:
+    # The internal path of CollisionMonitor: velocity alone, bit for bit as step.
+    x = _noisy_record(50)
+    state = est.initial_state(x[0])
+    zis = (state.position, state.velocity, state.acceleration)
+    for sample in x:
+        y, state = est.step(sample, state)
+        outputs, new = est._step_outputs(sample, zis, (False, True, False))
+        assert outputs[0] is None and outputs[2] is None
+        np.testing.assert_array_equal(outputs[1], y.velocity)
+        np.testing.assert_array_equal(new[1], state.velocity)
+        assert new[0] is zis[0] and new[2] is zis[2]  # not selected: left as they were
+        zis = (state.position, new[1], state.acceleration)

@@ -103,3 +103,47 @@ def test_pipeline_errors_are_clear(runs) -> None:
         ObserverSettings(kind="magic")
     with pytest.raises(TypeError, match="unknown observer settings"):
         ObserverSettings.from_dict({"kind": "motor", "colour": "red"})
+
+
+@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")
+@pytest.mark.filterwarnings("ignore:invalid value encountered:RuntimeWarning")
+@pytest.mark.parametrize("method", ["constant", "time-variant"])
+def test_stream_equals_the_public_components_step_by_step(runs, method) -> None:
+    # The monitor skips re-validation internally; it must give exactly what the
+    # validated public steps give, including on a finite sample whose huge value
+    # makes the observer outputs non-finite (a detector fault).
+    free, test, nominal = runs
+    threshold, settings = tune(free, nominal, method, margin=0.05)
+    monitor = CollisionMonitor(nominal, threshold, settings)
+    dt = monitor.dt
+    estimator = settings.estimator(dt)
+    observer = sl.observers.MomentumObserver(nominal, dt, settings.gain, torque=settings.kind)
+    detector = sl.detection.Detector(threshold)
+    q_huge = test.q[250] + 1e200
+    samples = [(test.t[k], test.q[k], test.tau_m[k]) for k in range(300)]
+    samples[250] = (test.t[250], q_huge, test.tau_m[250])
+    states = None
+    for t, q, tau in samples:
+        got = monitor.step(t, q, tau)
+        if states is None:
+            states = (
+                estimator.initial_state(q),
+                observer.initial_state(q, np.zeros_like(q)),
+                detector.initial_state(dt),
+            )
+        y, est_state = estimator.step(q, states[0])
+        sample, obs_state = observer.step(states[1], q, y.velocity, tau)
+        expected, det_state = detector.step(
+            states[2], *sample, y.velocity, t, position=q, acceleration=y.acceleration
+        )
+        states = (est_state, obs_state, det_state)
+        assert (got.status, got.t, got.joints, got.message) == (
+            expected.status,
+            expected.t,
+            expected.joints,
+            expected.message,
+        )
+        assert got.event == expected.event
+        for name in ("residual", "lower", "upper"):
+            np.testing.assert_array_equal(getattr(got, name), getattr(expected, name))
+    assert monitor.step(*samples[-1]).status == "fault"  # time does not increase

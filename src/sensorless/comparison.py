@@ -17,9 +17,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from .detection import Detector
 from .evaluation import Evaluation, comparison_table, efficiency_table, evaluate, summary_table
 from .io import Log
-from .monitor import METHOD_NAMES, CollisionMonitor, tune
+from .monitor import METHOD_NAMES, ObserverSettings, make_threshold
 from .plots import plot_residuals
 from .report import write_report
 from .signals import Event, ObserverSignals
@@ -100,6 +101,7 @@ def compare(
     margin_fraction: float = 0.1,
     min_duration: float = 0.005,
     hold: float = 0.05,
+    model_tuning_runs: int = 1,
     progress: Callable[[str], None] | None = None,
 ) -> Comparison:
     """Tune every method on collision-free runs of ``scenario`` and evaluate on a collision run.
@@ -117,13 +119,15 @@ def compare(
     joints : sequence of int, optional
         Monitored joints (1-based); the thesis watches joints 1–3 of the PUMA.
     margin_fraction : float
-        Every momentum-residual method gets the same absolute margin,
-        ``margin_fraction`` × β_j of the constant threshold (β = max|r̂| on the
-        tuning runs): without one, a threshold fitted at the exact maximum of
-        a few runs raises alarms on any new run. The model-based threshold's
-        margin is the same fraction of its own friction term.
+        Every method gets the same absolute margin, ``margin_fraction`` × β_j
+        of the constant threshold (β = max|r̂| on the tuning runs): without
+        one, a threshold fitted at the exact maximum of a few runs raises
+        alarms on any new run.
     min_duration, hold : float
         Event filtering [s] (:class:`~sensorless.detection.Detector`).
+    model_tuning_runs : int
+        Tuning runs the model-based threshold is fitted on (its fit is the
+        slowest: the split regressor at every sample).
     progress : callable(str), optional
         Told what is being done.
     """
@@ -139,34 +143,36 @@ def compare(
     nominal = scenario.robots()[1]
     joint_tuple = None if joints is None else tuple(int(j) for j in joints)
 
-    constant, _ = tune(tuning, nominal, "constant", joints=joint_tuple)
+    # One observer pass per residual kind, shared by every method that watches it.
+    kinds = {METHOD_NAMES[method] for method in ("constant", *methods)}
+    settings = {kind: ObserverSettings(kind=kind) for kind in kinds}
+    tuning_signals = {k: [settings[k].observe(log, nominal) for log in tuning] for k in kinds}
+    signals = {kind: settings[kind].observe(test, nominal) for kind in kinds}
+
+    constant = make_threshold("constant", nominal, joints=joint_tuple).fit(tuning_signals["motor"])
     assert isinstance(constant, ConstantThreshold)
     margin = margin_fraction * constant.beta_
     thresholds: dict[str, Threshold] = {}
     evaluations: dict[str, Evaluation] = {}
-    signals: dict[str, ObserverSignals] = {}
     bounds: dict[str, tuple[FloatArray, FloatArray]] = {}
     events: dict[str, list[Event]] = {}
     for method in methods:
-        say(f"{scenario.name}: tuning {method}")
-        options: dict[str, Any] = {"joints": joint_tuple}
+        say(f"{scenario.name}: tuning and detecting with {method}")
+        kind = METHOD_NAMES[method]
+        options: dict[str, Any] = {"joints": joint_tuple, "margin": margin}
         if method in ("time-variant", "hysteretic"):
             options["fit_method"] = "minimax"
-        if METHOD_NAMES[method] == "acceleration":
-            unmargined, _ = tune(tuning, nominal, method, **options)
-            options["margin"] = margin_fraction * np.asarray(unmargined.b_fr_)  # type: ignore[attr-defined]
-        else:
-            options["margin"] = margin
-        threshold, settings = tune(tuning, nominal, method, **options)
-        monitor = CollisionMonitor(
-            nominal, threshold, settings, min_duration=min_duration, hold=hold
-        )
-        run_signals, found = monitor.run(test)
+        fit_runs = tuning_signals[kind]
+        if kind == "acceleration":
+            # Its bound needs the split regressor at every sample (l Pinocchio
+            # regressor calls each): the costliest fit by far.
+            fit_runs = fit_runs[:model_tuning_runs]
+        threshold = make_threshold(method, nominal, **options).fit(fit_runs)
+        detector = Detector(threshold, min_duration=min_duration, hold=hold)
         thresholds[method] = threshold
-        signals.setdefault(settings.kind, run_signals)
-        bounds[method] = threshold.bounds(run_signals)
-        events[method] = found
-        evaluations[method] = evaluate(found, test, method=method)
+        bounds[method] = threshold.bounds(signals[kind])
+        events[method] = detector.detect(signals[kind])
+        evaluations[method] = evaluate(events[method], test, method=method)
     return Comparison(
         scenario.name,
         joint_tuple,

@@ -54,9 +54,15 @@ import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
 from ._validation import FloatArray, as_joint_array, check_dt
-from .exceptions import DimensionError, InputValueError
+from .exceptions import DimensionError, InputTypeError, InputValueError
 from .signals import Event, ObserverSignals
-from .thresholds.base import Threshold, ThresholdState, check_joints, check_seconds
+from .thresholds.base import (
+    Threshold,
+    ThresholdInputs,
+    ThresholdState,
+    check_joints,
+    check_seconds,
+)
 
 __all__ = [
     "DetectionResult",
@@ -242,7 +248,7 @@ class Detector:
         hold: float = 0.0,
     ) -> None:
         if not isinstance(threshold, Threshold):
-            raise TypeError(
+            raise InputTypeError(
                 f"threshold must be a Threshold (e.g. ConstantThreshold); got "
                 f"{type(threshold).__name__}"
             )
@@ -441,7 +447,7 @@ class Detector:
             An input of the wrong shape (a programming error, not a data fault).
         """
         if not isinstance(state, DetectorState):
-            raise TypeError(
+            raise InputTypeError(
                 f"state must be a DetectorState from initial_state or step; "
                 f"got {type(state).__name__}"
             )
@@ -455,7 +461,7 @@ class Detector:
             "position": position,
             "acceleration": acceleration,
         }
-        inputs: dict[str, Any] = {
+        inputs: dict[str, FloatArray | None] = {
             k: None if v is None else _one_sample(v, n_dof, k) for k, v in named.items()
         }
         time = _as_time(t)
@@ -464,14 +470,33 @@ class Detector:
             nan = np.full(n_dof, np.nan)
             return Verdict("fault", time, (), r, nan, nan.copy(), None, fault), state
 
+        rows = {k: None if v is None else v[None] for k, v in inputs.items()}
+        return self._step_checked(state, r, ThresholdInputs(**rows), time)  # type: ignore[arg-type]
+
+    def _step_checked(
+        self, state: DetectorState, r: FloatArray, inputs: ThresholdInputs, time: float
+    ) -> tuple[Verdict, DetectorState]:
+        """The core of :meth:`step` for a sample that is not a fault.
+
+        ``r`` has shape (n_dof,); ``inputs`` hold one sample, each of shape
+        (1, n_dof), all finite (or None); ``time`` is finite and past ``state.t``.
+        """
         threshold_state = state.threshold
         if threshold_state is None:
-            threshold_state = self.threshold.initial_state(**inputs, dt=state.dt)
-        lower, upper, threshold_state = self.threshold.step(threshold_state, **inputs)
+            threshold_state = self.threshold.initial_state(
+                inputs.model_torque,
+                inputs.friction,
+                inputs.sign,
+                inputs.velocity,
+                position=inputs.position,
+                acceleration=inputs.acceleration,
+                dt=state.dt,
+            )
+        lower, upper, threshold_state = self.threshold._step_checked(threshold_state, inputs)
         cols = np.asarray(self.monitored_joints) - 1
         excursion = _excursion(r, lower, upper)[cols]
         out = excursion > 0.0
-        joints = tuple(int(j) for j in cols[out] + 1)
+        joints = tuple((cols[out] + 1).tolist())
 
         ended: Event | None = None
         current = state.open_event
@@ -503,7 +528,7 @@ class Detector:
             State without an open event.
         """
         if not isinstance(state, DetectorState):
-            raise TypeError(f"state must be a DetectorState; got {type(state).__name__}")
+            raise InputTypeError(f"state must be a DetectorState; got {type(state).__name__}")
         event = self._close(state.open_event)
         return event, DetectorState(state.dt, state.threshold, state.t, False, None)
 

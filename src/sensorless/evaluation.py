@@ -43,7 +43,7 @@ import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
 from ._validation import FloatArray
-from .exceptions import DimensionError, InputValueError, LogFormatError
+from .exceptions import DimensionError, InputTypeError, InputValueError, LogFormatError
 from .io import Log
 from .signals import Event
 
@@ -218,7 +218,7 @@ def _check_events(events: Iterable[Event]) -> list[Event]:
     checked = list(events)
     for index, event in enumerate(checked):
         if not isinstance(event, Event):
-            raise TypeError(
+            raise InputTypeError(
                 f"events must be sensorless.signals.Event objects; item {index} is a "
                 f"{type(event).__name__}"
             )
@@ -483,7 +483,7 @@ def evaluate(
 
 def _check_evaluations(evaluations: Mapping[str, Evaluation]) -> list[tuple[str, Evaluation]]:
     if not isinstance(evaluations, Mapping):
-        raise TypeError(
+        raise InputTypeError(
             "evaluations must be a mapping {method name: Evaluation}; got "
             f"{type(evaluations).__name__}"
         )
@@ -492,7 +492,7 @@ def _check_evaluations(evaluations: Mapping[str, Evaluation]) -> list[tuple[str,
         raise InputValueError("evaluations must hold at least one {method name: Evaluation}")
     for name, evaluation in items:
         if not isinstance(evaluation, Evaluation):
-            raise TypeError(
+            raise InputTypeError(
                 f"evaluations[{name!r}] must be an Evaluation; got {type(evaluation).__name__}"
             )
     return items

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 __all__ = [
     "DimensionError",
+    "InputTypeError",
     "InputValueError",
     "LogFormatError",
     "ModelError",
@@ -27,6 +28,10 @@ class SensorlessError(Exception):
 
 class DimensionError(SensorlessError, ValueError):
     """An array has the wrong shape or a joint count does not match the robot."""
+
+
+class InputTypeError(SensorlessError, TypeError):
+    """An argument of the wrong type, or an unknown keyword / option name."""
 
 
 class InputValueError(SensorlessError, ValueError):

@@ -67,7 +67,7 @@ from numpy.typing import ArrayLike
 from scipy import signal
 
 from ._validation import FloatArray, as_joint_array, check_dt
-from .exceptions import DimensionError, InputValueError
+from .exceptions import DimensionError, InputTypeError, InputValueError
 
 __all__ = [
     "Butterworth",
@@ -85,6 +85,7 @@ __all__ = [
 _DIFFERENCE = np.array([[1.0, -1.0, 0.0, 1.0, 0.0, 0.0]])
 _IDENTITY = np.array([[1.0, 0.0, 0.0, 1.0, 0.0, 0.0]])
 _NO_SECTIONS = np.empty((0, 6))
+_ALL_OUTPUTS = (True, True, True)
 
 
 class Derivatives(NamedTuple):
@@ -226,7 +227,7 @@ class CausalEstimator:
         (acceleration); zero sections mean no filtering.
     """
 
-    __slots__ = ("_delays", "_dt", "_scale", "_sos", "_zi_unit")
+    __slots__ = ("_coefficients", "_delays", "_dt", "_scale", "_sos", "_zi_unit")
 
     def __init__(self, dt: float, lowpass: tuple[FloatArray, FloatArray, FloatArray]) -> None:
         self._dt = dt
@@ -239,6 +240,8 @@ class CausalEstimator:
             sos.append(np.array(cascade if cascade.shape[0] else _IDENTITY))
             delays.append(dt * (0.5 * order + _dc_group_delay(filt)))
         self._sos: tuple[FloatArray, ...] = tuple(sos)
+        # The same coefficients as Python floats, for the per-sample recursion.
+        self._coefficients = tuple(_sections(s) for s in self._sos)
         # sosfilt_zi scales each section by the DC gain of those before it, so
         # the sections after a difference start at exactly zero.
         self._zi_unit = tuple(_frozen(signal.sosfilt_zi(s)) for s in self._sos)
@@ -322,13 +325,34 @@ class CausalEstimator:
                 f"step takes one sample x of shape ({state.n_dof},); got shape {np.shape(x)}; "
                 "use filter for a whole array"
             )
-        outputs, final = [], []
         zis = (state.position, state.velocity, state.acceleration)
-        for sos, zi, scale in zip(self._sos, zis, self._scale, strict=True):
-            y, zf = _sos_sample(sos, arr[0], zi)
-            outputs.append(y / scale)
-            final.append(zf)
-        return Derivatives(*outputs), FilterState(*final)
+        outputs, final = self._step_outputs(arr[0], zis, _ALL_OUTPUTS)
+        return Derivatives(*outputs), FilterState(*final)  # type: ignore[arg-type]
+
+    def _step_outputs(
+        self,
+        x: FloatArray,
+        zis: tuple[FloatArray, FloatArray, FloatArray],
+        which: tuple[bool, bool, bool],
+    ) -> tuple[
+        tuple[FloatArray | None, FloatArray | None, FloatArray | None],
+        tuple[FloatArray, FloatArray, FloatArray],
+    ]:
+        """One checked sample through the cascades selected by ``which``; the core of :meth:`step`.
+
+        ``x`` has shape (n_dof,) and ``zis`` are the (position, velocity,
+        acceleration) section states. Returns the outputs (None where not
+        selected) and the new states; the state of a cascade that is not
+        selected is returned unchanged, so it is only meaningful to callers
+        that never select that cascade.
+        """
+        outputs: list[FloatArray | None] = [None, None, None]
+        final = list(zis)
+        for k in range(3):
+            if which[k]:
+                y, final[k] = _sos_sample(self._coefficients[k], x, zis[k])
+                outputs[k] = y / self._scale[k]
+        return (outputs[0], outputs[1], outputs[2]), (final[0], final[1], final[2])
 
     def filter(
         self, x: ArrayLike, state: FilterState | None = None
@@ -372,7 +396,7 @@ class CausalEstimator:
 
     def _check_state(self, state: Any) -> FilterState:
         if not isinstance(state, FilterState):
-            raise TypeError(
+            raise InputTypeError(
                 f"state must be a FilterState from initial_state, step or filter; "
                 f"got {type(state).__name__}"
             )
@@ -632,12 +656,26 @@ class SavitzkyGolay:
         return f"SavitzkyGolay(dt={self._dt!r}, window={self._window}, polyorder={self._polyorder})"
 
 
-def _sos_sample(sos: FloatArray, x: FloatArray, zi: FloatArray) -> tuple[FloatArray, FloatArray]:
+_Section = tuple[float, float, float, float, float, float]
+
+
+def _sections(sos: FloatArray) -> tuple[_Section, ...]:
+    """Rows of ``sos`` as tuples of Python floats (same values, cheaper to unpack)."""
+    return tuple(
+        (float(b0), float(b1), float(b2), float(a0), float(a1), float(a2))
+        for b0, b1, b2, a0, a1, a2 in sos
+    )
+
+
+def _sos_sample(
+    sos: tuple[_Section, ...], x: FloatArray, zi: FloatArray
+) -> tuple[FloatArray, FloatArray]:
     """One sample through second-order sections, transposed direct form II.
 
     The recursion :func:`scipy.signal.sosfilt` runs, written out for a single
     sample: calling sosfilt on one row costs far more than the arithmetic
     (axis handling and validation), and a live detector calls this at 1 kHz.
+    ``sos`` holds the sections as float tuples (see :func:`_sections`);
     ``zi`` has shape (n_sections, 2, n_dof); a new state array is returned.
     """
     zf = np.empty_like(zi)

@@ -11,18 +11,19 @@ Units SI and radians; time along axis 0.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import yaml
 from numpy.typing import ArrayLike
 
-from ._validation import check_dt
+from ._validation import FloatArray, check_dt
 from .detection import Detector, DetectorState, Verdict
-from .exceptions import DimensionError, InputValueError, UnknownNameError
+from .exceptions import DimensionError, InputTypeError, InputValueError, UnknownNameError
 from .filters import Butterworth, CausalEstimator, DirtyDerivative, FiniteDifference
 from .io import Log
 from .observers import AccelerationObserver, MomentumObserver, default_estimator, observe
@@ -32,6 +33,7 @@ from .thresholds import (
     ConstantThreshold,
     ModelBasedThreshold,
     Threshold,
+    ThresholdInputs,
     TimeVariantThreshold,
     VelocityThreshold,
 )
@@ -118,7 +120,9 @@ class ObserverSettings:
         valid = set(cls.__dataclass_fields__)
         unknown = set(data) - valid
         if unknown:
-            raise TypeError(f"unknown observer settings {sorted(unknown)}; valid: {sorted(valid)}")
+            raise InputTypeError(
+                f"unknown observer settings {sorted(unknown)}; valid: {sorted(valid)}"
+            )
         return cls(**data)
 
 
@@ -214,7 +218,7 @@ class _StreamState:
     """Mutable state of a live :class:`CollisionMonitor` (one object per stream)."""
 
     t: float
-    estimator: Any
+    estimator: Any  # section states (position, velocity, acceleration) of the estimator
     observer: Any
     detector: DetectorState
 
@@ -262,6 +266,12 @@ class CollisionMonitor:
         else:
             self._observer = MomentumObserver(robot, self.dt, settings.gain, torque=settings.kind)
         self._state: _StreamState | None = None
+        # Estimator outputs the stream needs: never the filtered position (the
+        # detector gets q), the acceleration only where it is used.
+        needs_acceleration = settings.kind == "acceleration" or isinstance(
+            threshold, ModelBasedThreshold
+        )
+        self._outputs = (False, True, needs_acceleration)
 
     # ----------------------------------------------------------------- batch
     def run(self, log: Log) -> tuple[ObserverSignals, list[Event]]:
@@ -303,40 +313,79 @@ class CollisionMonitor:
         if fault:
             nan = np.full(self.robot.n_dof, np.nan)
             return Verdict("fault", _as_float(t), (), nan, nan, nan.copy(), None, fault)
-        q_arr = np.asarray(q, dtype=float)
-        tau = np.asarray(tau_j if self.settings.kind == "joint" else tau_m, dtype=float)
+        time = float(t)
+        kind = self.settings.kind
+        # Contiguous, as the observer's own checks would make them (Pinocchio takes them).
+        q_arr = np.ascontiguousarray(q, dtype=float)
+        tau = np.ascontiguousarray(tau_j if kind == "joint" else tau_m, dtype=float)
         state = self._state
         if state is None:
-            estimator = self._estimator.initial_state(q_arr)
-            if self.settings.kind == "acceleration":
+            initial = self._estimator.initial_state(q_arr)
+            estimator = (initial.position, initial.velocity, initial.acceleration)
+            if kind == "acceleration":
                 observer = self._observer.initial_state(q_arr)
             else:
                 observer = self._observer.initial_state(q_arr, np.zeros_like(q_arr))
-            state = _StreamState(
-                float(t), estimator, observer, self.detector.initial_state(self.dt)
-            )
-        if self.settings.kind == "acceleration":
+            state = _StreamState(time, estimator, observer, self.detector.initial_state(self.dt))
+        # Dot products propagate NaN/inf: ``total`` is finite when every value the
+        # detector checks is (a huge finite value that merely overflows takes the
+        # fully checked path, with the same result).
+        if kind == "acceleration":
             sample, state.observer = self._observer.step(state.observer, q_arr, tau)
-            derivatives, state.estimator = self._estimator.step(q_arr, state.estimator)
+            velocity, acceleration = self._derivatives(state, q_arr)
+            total = velocity @ velocity + sum(row @ row for row in sample)
         else:
-            derivatives, state.estimator = self._estimator.step(q_arr, state.estimator)
-            sample, state.observer = self._observer.step(
-                state.observer, q_arr, derivatives.velocity, tau
+            velocity, acceleration = self._derivatives(state, q_arr)
+            total = velocity @ velocity
+            if math.isfinite(total):
+                # q and tau were checked by _fault: skip the observer's own checks.
+                sample, state.observer = self._observer._step_checked(
+                    state.observer, q_arr, velocity, tau
+                )
+            else:  # let the observer report the non-finite velocity
+                sample, state.observer = self._observer.step(state.observer, q_arr, velocity, tau)
+            # The sample's residual, model torque, friction and sign are its rows.
+            filtered = state.observer.filtered.reshape(-1)
+            total += filtered @ filtered
+        if acceleration is not None:
+            total += acceleration @ acceleration
+        residual, model_torque, friction, sign = sample
+        if math.isfinite(total):
+            inputs = ThresholdInputs(
+                model_torque[None],
+                friction[None],
+                sign[None],
+                velocity[None],
+                q_arr[None],
+                None if acceleration is None else acceleration[None],
             )
-        verdict, state.detector = self.detector.step(
-            state.detector,
-            sample.residual,
-            sample.model_torque,
-            sample.friction,
-            sample.sign,
-            derivatives.velocity,
-            float(t),
-            position=q_arr,
-            acceleration=derivatives.acceleration,
-        )
-        state.t = float(t)
+            verdict, state.detector = self.detector._step_checked(
+                state.detector, residual, inputs, time
+            )
+        else:  # the detector's own checks name the non-finite value
+            verdict, state.detector = self.detector.step(
+                state.detector,
+                residual,
+                model_torque,
+                friction,
+                sign,
+                velocity,
+                time,
+                position=q_arr,
+                acceleration=acceleration,
+            )
+        state.t = time
         self._state = state
         return verdict
+
+    def _derivatives(
+        self, state: _StreamState, q: FloatArray
+    ) -> tuple[FloatArray, FloatArray | None]:
+        """Velocity and (where needed) acceleration of a checked sample; advances the estimator."""
+        (_, velocity, acceleration), state.estimator = self._estimator._step_outputs(
+            q, state.estimator, self._outputs
+        )
+        return cast(FloatArray, velocity), acceleration  # velocity is always selected
 
     def finish(self) -> Event | None:
         """Close the stream: the event still open, if any."""
@@ -351,7 +400,7 @@ class CollisionMonitor:
             time = float(t)
         except (TypeError, ValueError):
             return f"time must be a number of seconds; got {t!r}"
-        if not np.isfinite(time):
+        if not math.isfinite(time):
             return f"time must be finite; got {time}"
         if self._state is not None and time <= self._state.t:
             return f"time must increase: {time} s after {self._state.t} s"

@@ -57,7 +57,7 @@ from numpy.typing import ArrayLike
 from scipy import signal
 
 from ._validation import FloatArray, as_joint_array, check_dt, check_finite
-from .exceptions import DimensionError, InputValueError, LogFormatError
+from .exceptions import DimensionError, InputTypeError, InputValueError, LogFormatError
 from .filters import Butterworth, CausalEstimator, FilterState, FiniteDifference
 from .friction import FrictionModel, LuGre, Stribeck
 from .io import Log
@@ -179,7 +179,7 @@ class ObserverState:
 # ---------------------------------------------------------------- shared helpers
 def _check_robot(robot: Any) -> RobotModel:
     if not isinstance(robot, RobotModel):
-        raise TypeError(
+        raise InputTypeError(
             f"robot must be a sensorless RobotModel (e.g. sensorless.robots.load('panda')); "
             f"got {type(robot).__name__}"
         )
@@ -236,7 +236,7 @@ def _resolve_friction(friction: Any, robot: RobotModel) -> FrictionModel | None:
             delta=friction.delta,
         )  # fmt: skip
     if not isinstance(friction, FrictionModel):
-        raise TypeError(
+        raise InputTypeError(
             "friction must be 'model', None, a sensorless.friction.FrictionModel or LuGre; "
             f"got {type(friction).__name__}"
         )
@@ -285,10 +285,19 @@ def _filter_inputs(
     """
     p0, vg0, fr0, s0, tau0 = previous
     p1, vg1, fr1, s1 = current
-    out[_MODEL_TORQUE] = (p1 - p0) / dt - 0.5 * (vg0 + vg1)
-    out[_FRICTION] = 0.5 * (fr0 + fr1)
-    out[_SIGN] = 0.5 * (s0 + s1)
-    out[_RESIDUAL] = (out[_MODEL_TORQUE] + out[_FRICTION]) - tau0
+    # In place in the rows of ``out`` (no temporaries), operation for operation:
+    #   h = (p1 - p0) / dt - 0.5 (vg0 + vg1),   f = 0.5 (fr0 + fr1),
+    #   s = 0.5 (s0 + s1),                       r = (h + f) - tau0.
+    h, fr, sg, r = out[_MODEL_TORQUE], out[_FRICTION], out[_SIGN], out[_RESIDUAL]
+    np.subtract(p1, p0, out=h)
+    h /= dt
+    h -= 0.5 * (vg0 + vg1)
+    np.add(fr0, fr1, out=fr)
+    fr *= 0.5
+    np.add(s0, s1, out=sg)
+    sg *= 0.5
+    np.add(h, fr, out=r)
+    r -= tau0
 
 
 def _check_time(t: ArrayLike, n_samples: int, dt: float) -> FloatArray:
@@ -370,7 +379,7 @@ class _FrictionFunction:
 
     def __call__(self, qd: FloatArray) -> FloatArray:
         if self._model is None:
-            return np.zeros_like(qd)
+            return np.zeros(qd.shape, dtype=qd.dtype)
         # Per-joint parameters of shape (n_dof,) or (1,) broadcast against qd.
         return self._model.evaluate(qd)
 
@@ -528,7 +537,8 @@ class MomentumObserver:
         gravity = np.empty_like(q)
         coriolis = np.empty((n_samples, n_dof, n_dof))
         rnea, grav, cor = pin.rnea, pin.computeGeneralizedGravity, pin.computeCoriolisMatrix
-        for k, (qk, qdk) in enumerate(zip(q, qd, strict=True)):
+        for k in range(n_samples):  # indexing is cheaper than zip over array rows
+            qk, qdk = q[k], qd[k]
             gravity[k] = grav(model, data, qk)
             # RNEA at zero velocity with q̈ := q̇ gives M(q) q̇ + g(q), armature included.
             momentum[k] = rnea(model, data, qk, zero, qdk)
@@ -569,7 +579,7 @@ class MomentumObserver:
 
     def _check_state(self, state: Any) -> ObserverState:
         if not isinstance(state, ObserverState):
-            raise TypeError(
+            raise InputTypeError(
                 "state must be an ObserverState from initial_state, step or run; "
                 f"got {type(state).__name__}"
             )
@@ -613,8 +623,19 @@ class MomentumObserver:
         # only then look for the culprit (a huge but finite value merely overflows).
         if not math.isfinite(q_arr @ q_arr + qd_arr @ qd_arr + tau_arr @ tau_arr):
             _check_sample_finite(q=q_arr, qd=qd_arr, tau=tau_arr)
-        p, vg, fr, sgn = (x[0] for x in self._terms(q_arr[None], qd_arr[None]))
-        inputs = np.empty((4, n))
+        return self._step_checked(state, q_arr, qd_arr, tau_arr)
+
+    def _step_checked(
+        self, state: ObserverState, q: FloatArray, qd: FloatArray, tau: FloatArray
+    ) -> tuple[ObserverSample, ObserverState]:
+        """The core of :meth:`step` for a checked state and checked samples.
+
+        ``q``, ``qd`` and ``tau`` are finite, C-contiguous float arrays of
+        shape (n_dof,); ``tau`` is copied into the new state. The fields of
+        the returned sample are the rows of the new state's ``filtered``.
+        """
+        p, vg, fr, sgn = [x[0] for x in self._terms(q[None], qd[None])]
+        inputs = np.empty((4, q.shape[0]))
         previous = (
             state.momentum, state.coriolis_gravity, state.friction_torque,
             state.velocity_sign, state.torque,
@@ -623,7 +644,7 @@ class MomentumObserver:
         # Same arithmetic as lfilter([1 - a], [1, -a]): y = (1 - a) u + a y_prev.
         filtered = self._weight * inputs + self._pole * state.filtered
         filtered.setflags(write=False)
-        new_state = ObserverState(p, vg, fr, sgn, tau_arr.copy(), filtered)
+        new_state = ObserverState(p, vg, fr, sgn, tau.copy(), filtered)
         return ObserverSample(*filtered), new_state
 
     # ------------------------------------------------------------ batch
@@ -773,7 +794,7 @@ class AccelerationObserver:
     ) -> None:
         self._robot = _check_robot(robot)
         if not isinstance(estimator, CausalEstimator):
-            raise TypeError(
+            raise InputTypeError(
                 "estimator must be a causal estimator of sensorless.filters (FiniteDifference, "
                 f"DirtyDerivative, Butterworth); got {type(estimator).__name__}"
             )
@@ -849,7 +870,7 @@ class AccelerationObserver:
 
     def _check_state(self, state: Any) -> FilterState:
         if not isinstance(state, FilterState):
-            raise TypeError(
+            raise InputTypeError(
                 "state must be a FilterState from initial_state, step or run; "
                 f"got {type(state).__name__}"
             )
@@ -1059,7 +1080,7 @@ def observe(
         Unknown ``kind`` or ``velocity``, or an estimator of another period.
     """
     if not isinstance(log, Log):
-        raise TypeError(f"log must be a sensorless.io.Log; got {type(log).__name__}")
+        raise InputTypeError(f"log must be a sensorless.io.Log; got {type(log).__name__}")
     robot = _check_robot(robot)
     if robot.n_dof != log.n_dof:
         raise DimensionError(
@@ -1084,7 +1105,7 @@ def observe(
         if estimator is None:
             estimator = default_estimator(dt, kind)
         elif not isinstance(estimator, CausalEstimator):
-            raise TypeError(
+            raise InputTypeError(
                 "estimator must be a causal estimator of sensorless.filters; got "
                 f"{type(estimator).__name__}"
             )

@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike
 
 from ._validation import FloatArray
 from .evaluation import Evaluation, Window, collision_windows
-from .exceptions import DimensionError, InputValueError
+from .exceptions import DimensionError, InputTypeError, InputValueError
 from .io import Log
 from .signals import Event, ObserverSignals
 
@@ -97,7 +97,7 @@ def _check_bounds(
     bounds: Mapping[str, tuple[ArrayLike, ArrayLike]], shape: tuple[int, int]
 ) -> dict[str, tuple[FloatArray, FloatArray]]:
     if not isinstance(bounds, Mapping):
-        raise TypeError(
+        raise InputTypeError(
             f"bounds must be a mapping {{method name: (lower, upper)}}; got {type(bounds).__name__}"
         )
     checked = {}
@@ -176,7 +176,7 @@ def plot_residuals(
     chosen = _check_joints(joints, signals.n_dof)
     checked = _check_bounds(bounds if bounds is not None else {}, signals.residual.shape)
     if events is not None and not isinstance(events, Mapping):
-        raise TypeError(
+        raise InputTypeError(
             f"events must be a mapping {{method name: list of Event}}; got {type(events).__name__}"
         )
     detections = {str(name): list(found) for name, found in (events or {}).items()}
@@ -354,7 +354,7 @@ def plot_evaluation(
     elif isinstance(evaluations, Mapping):
         items = [(str(name), evaluation) for name, evaluation in evaluations.items()]
     else:
-        raise TypeError(
+        raise InputTypeError(
             "evaluations must be an Evaluation or a mapping {method name: Evaluation}; got "
             f"{type(evaluations).__name__}"
         )
@@ -362,7 +362,7 @@ def plot_evaluation(
         raise InputValueError("evaluations must hold at least one {method name: Evaluation}")
     for name, evaluation in items:
         if not isinstance(evaluation, Evaluation):
-            raise TypeError(
+            raise InputTypeError(
                 f"evaluations[{name!r}] must be an Evaluation; got {type(evaluation).__name__}"
             )
     t_start = min(evaluation.t_start for _, evaluation in items)

@@ -30,7 +30,7 @@ from typing import Any
 import pandas as pd
 from matplotlib.figure import Figure
 
-from .exceptions import InputValueError
+from .exceptions import InputTypeError, InputValueError
 
 __all__ = ["write_report"]
 
@@ -85,7 +85,7 @@ def _render_item(item: Any, where: str, dpi: float) -> str:
         return _render_figure(item, dpi)
     if isinstance(item, str):
         return _render_text(item)
-    raise TypeError(
+    raise InputTypeError(
         f"{where} must be a pandas DataFrame or Series, a matplotlib Figure or a str; "
         f"got {type(item).__name__}"
     )

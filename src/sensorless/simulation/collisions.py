@@ -47,7 +47,13 @@ import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
 from .._validation import FloatArray, as_joint_array
-from ..exceptions import DimensionError, InputValueError, LogFormatError, UnknownNameError
+from ..exceptions import (
+    DimensionError,
+    InputTypeError,
+    InputValueError,
+    LogFormatError,
+    UnknownNameError,
+)
 from ..robots.model import RobotModel
 
 __all__ = [
@@ -432,7 +438,7 @@ class Contact:
         object.__setattr__(self, "point", point)
         object.__setattr__(self, "direction", direction)
         if not isinstance(self.profile, ForceProfile):
-            raise TypeError(
+            raise InputTypeError(
                 f"contact {self.id}: profile must be a ForceProfile (HalfSine, Push, "
                 f"Recorded); got {type(self.profile).__name__}"
             )
@@ -563,7 +569,7 @@ class ContactSet:
         seen: dict[int, int] = {}
         for position, contact in enumerate(items):
             if not isinstance(contact, Contact):
-                raise TypeError(
+                raise InputTypeError(
                     f"ContactSet takes Contact objects; item {position} is {type(contact).__name__}"
                 )
             if contact.id in seen:
@@ -718,7 +724,7 @@ class ContactSet:
             Half-width of the cube of contact points around the link origin [m].
         """
         if not isinstance(rng, np.random.Generator):
-            raise TypeError(
+            raise InputTypeError(
                 f"rng must be a numpy.random.Generator (numpy.random.default_rng(seed)); "
                 f"got {type(rng).__name__}"
             )

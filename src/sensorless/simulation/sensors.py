@@ -55,7 +55,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validation import FloatArray, as_joint_array
-from ..exceptions import DimensionError, InputValueError
+from ..exceptions import DimensionError, InputTypeError, InputValueError
 
 __all__ = ["SensorModel", "SensorState"]
 
@@ -155,11 +155,13 @@ class SensorModel:
             ``values`` is not a mapping or has a key that is not a field.
         """
         if not isinstance(values, Mapping):
-            raise TypeError(f"SensorModel.from_dict expects a mapping; got {type(values).__name__}")
+            raise InputTypeError(
+                f"SensorModel.from_dict expects a mapping; got {type(values).__name__}"
+            )
         valid = [item.name for item in dataclasses.fields(cls)]
         unknown = sorted(str(key) for key in values if key not in valid)
         if unknown:
-            raise TypeError(f"unknown SensorModel parameter(s) {unknown}; valid keys: {valid}")
+            raise InputTypeError(f"unknown SensorModel parameter(s) {unknown}; valid keys: {valid}")
         return cls(**values)
 
     def to_dict(self) -> dict[str, float | list[float]]:
@@ -273,7 +275,7 @@ class SensorModel:
         values, single = _signal(tau_j, "tau_j")
         n_dof = values.shape[1]
         if not isinstance(state, SensorState):
-            raise TypeError(
+            raise InputTypeError(
                 f"state must be a SensorState (SensorModel.initial_state); got "
                 f"{type(state).__name__}"
             )
@@ -313,7 +315,7 @@ class SensorModel:
         if not np.any(std):
             return values
         if not isinstance(rng, np.random.Generator):
-            raise TypeError(
+            raise InputTypeError(
                 f"{name} is on, so a numpy.random.Generator is needed "
                 f"(numpy.random.default_rng(seed)); got rng={rng!r}"
             )

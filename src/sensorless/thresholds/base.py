@@ -82,7 +82,13 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import signal
 
 from .._validation import FloatArray, as_joint_array, check_dt, check_finite
-from ..exceptions import DimensionError, InputValueError, NotFittedError, UnknownNameError
+from ..exceptions import (
+    DimensionError,
+    InputTypeError,
+    InputValueError,
+    NotFittedError,
+    UnknownNameError,
+)
 from ..signals import Event, ObserverSignals
 
 __all__ = [
@@ -315,7 +321,7 @@ def regular_period(t: FloatArray, what: str, rtol: float = 1e-6) -> float:
 def _as_runs(signals: Any) -> list[ObserverSignals]:
     runs = [signals] if isinstance(signals, ObserverSignals) else signals
     if not isinstance(runs, Sequence) or not all(isinstance(r, ObserverSignals) for r in runs):
-        raise TypeError(
+        raise InputTypeError(
             "fit takes an ObserverSignals or a sequence of ObserverSignals (collision-free "
             f"runs); got {type(signals).__name__}"
         )
@@ -409,6 +415,14 @@ class ThresholdState:
 
     dt: float
     zi: FloatArray
+
+
+def _check_state(state: Any) -> None:
+    if not isinstance(state, ThresholdState):
+        raise InputTypeError(
+            f"state must be a ThresholdState from initial_state, step or process; "
+            f"got {type(state).__name__}"
+        )
 
 
 # --------------------------------------------------------------------------- base
@@ -571,7 +585,9 @@ class Threshold(abc.ABC):
         """
         self._check_fitted()
         if not isinstance(signals, ObserverSignals):
-            raise TypeError(f"signals must be an ObserverSignals; got {type(signals).__name__}")
+            raise InputTypeError(
+                f"signals must be an ObserverSignals; got {type(signals).__name__}"
+            )
         if signals.n_dof != self.n_dof_ or signals.robot != self.robot_:
             error = DimensionError if signals.n_dof != self.n_dof_ else InputValueError
             raise error(
@@ -713,15 +729,15 @@ class Threshold(abc.ABC):
                     f"step takes one sample: {name} of shape ({self.n_dof_},); got shape "
                     f"{np.shape(value)}; use process for a chunk"
                 )
-        lower, upper, new_state = self.process(
-            state,
-            model_torque,
-            friction,
-            sign,
-            velocity,
-            position=position,
-            acceleration=acceleration,
-        )
+        _check_state(state)
+        inputs = self._inputs(model_torque, friction, sign, velocity, position, acceleration)
+        return self._step_checked(state, inputs)
+
+    def _step_checked(
+        self, state: ThresholdState, inputs: ThresholdInputs
+    ) -> tuple[FloatArray, FloatArray, ThresholdState]:
+        """The core of :meth:`step`: bounds of one checked sample, inputs of shape (1, n_dof)."""
+        lower, upper, new_state = self._apply(state, inputs)
         return lower[0], upper[0], new_state
 
     def process(
@@ -754,11 +770,7 @@ class Threshold(abc.ABC):
             State after the chunk.
         """
         self._check_fitted()
-        if not isinstance(state, ThresholdState):
-            raise TypeError(
-                f"state must be a ThresholdState from initial_state, step or process; "
-                f"got {type(state).__name__}"
-            )
+        _check_state(state)
         inputs = self._inputs(model_torque, friction, sign, velocity, position, acceleration)
         return self._apply(state, inputs)
 
@@ -798,9 +810,10 @@ class Threshold(abc.ABC):
         self, state: ThresholdState, inputs: ThresholdInputs
     ) -> tuple[FloatArray, FloatArray, ThresholdState]:
         lower, upper, new_state = self._run(state, inputs)
-        monitored = np.zeros(self.n_dof_, dtype=bool)
-        monitored[np.asarray(self.monitored_joints_) - 1] = True
-        if not monitored.all():
+        joints = self.monitored_joints_
+        if len(joints) < self.n_dof_:
+            monitored = np.zeros(self.n_dof_, dtype=bool)
+            monitored[np.asarray(joints) - 1] = True
             lower[:, ~monitored] = -np.inf
             upper[:, ~monitored] = np.inf
         return lower, upper, new_state

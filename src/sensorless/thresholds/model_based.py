@@ -61,7 +61,7 @@ import pinocchio as pin
 from numpy.typing import NDArray
 
 from .._validation import FloatArray
-from ..exceptions import DimensionError, InputValueError, ModelError
+from ..exceptions import DimensionError, InputTypeError, InputValueError, ModelError
 from ..filters import SavitzkyGolay
 from ..metric import (
     DEFAULT_CHUNK_SIZE,
@@ -206,7 +206,7 @@ class ModelBasedThreshold(Threshold):
         elif isinstance(self.robot, Mapping):
             model = _robot_from_description(self.robot)
         else:
-            raise TypeError(
+            raise InputTypeError(
                 "robot must be a RobotModel, the name of a built-in robot or a saved robot "
                 f"description (mapping); got {type(self.robot).__name__}"
             )

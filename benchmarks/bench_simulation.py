@@ -43,6 +43,7 @@ def main() -> None:
     spec["duration"] = args.seconds
     puma = Scenario("puma560-thesis", spec)
     rigid, rigid_sub = real_time_factor(lambda: puma.run(), args.seconds, args.repeat)
+    free, _ = real_time_factor(lambda: puma.run(collisions=False), args.seconds, args.repeat)
 
     robot = sl.robots.load("panda_gaz")
     lower, upper = robot.position_limits
@@ -70,8 +71,13 @@ def main() -> None:
         lambda: simulate(plant, controller, trajectory, args.seconds), args.seconds, args.repeat
     )
     print(f"{args.seconds:g} s simulated at 1 kHz, median of {args.repeat} runs")
-    print(f"rigid PUMA 560 + LuGre: {rigid:6.1f} x real time ({rigid_sub} RK4 substeps)")
-    print(f"flexible 7-joint arm:   {flexible:6.1f} x real time ({flexible_sub} RK4 substeps)")
+    print(
+        f"rigid PUMA 560 + LuGre, contacts:    {rigid:6.1f} x real time ({rigid_sub} RK4 substeps)"
+    )
+    print(f"rigid PUMA 560 + LuGre, no contacts: {free:6.1f} x real time")
+    print(
+        f"flexible 7-joint arm, torque loop:   {flexible:6.1f} x real time ({flexible_sub} substeps)"
+    )
 
 
 if __name__ == "__main__":

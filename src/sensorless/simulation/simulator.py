@@ -144,16 +144,17 @@ def simulate(
     friction = np.empty((n_samples, n))
     command = np.empty((n_samples, n))
     collision_id = np.zeros(n_samples, dtype=np.int64)
-    windows = [(c.profile.start, c.profile.end) for c in contacts]
+    windows = [(c.profile.start, c.profile.end, c) for c in contacts]
     no_contact = np.zeros(n)
     for k in range(n_samples):
         q_meas[k] = sensors.measure_position(state.q, position_rng)
         command[k], ctrl = controller.step(ctrl, q_meas[k], q_des[k], qd_des[k], period, qdd_des[k])
         contact = no_contact
-        if any(start <= t[k] <= end for start, end in windows):
-            contact = contacts.joint_torque(plant.robot, state.q, t[k])
+        active = [c for start, end, c in windows if start <= t[k] <= end]
+        if active:
+            contact = np.sum([c.joint_torque(plant.robot, state.q, t[k]) for c in active], axis=0)
             tau_c[k] = contact
-            collision_id[k] = contacts.active_id(t[k])
+            collision_id[k] = active[0].id if len(active) == 1 else contacts.active_id(t[k])
         q_true[k] = state.q
         qd_true[k] = state.qd
         if elastic is not None:

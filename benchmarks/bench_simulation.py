@@ -75,9 +75,7 @@ def main() -> None:
         f"rigid PUMA 560 + LuGre, contacts:    {rigid:6.1f} x real time ({rigid_sub} RK4 substeps)"
     )
     print(f"rigid PUMA 560 + LuGre, no contacts: {free:6.1f} x real time")
-    print(
-        f"flexible 7-joint arm, torque loop:   {flexible:6.1f} x real time ({flexible_sub} substeps)"
-    )
+    print(f"flexible 7-joint arm:   {flexible:6.1f} x real time ({flexible_sub} substeps)")
 
 
 if __name__ == "__main__":

@@ -42,3 +42,32 @@ def test_simulate_reports_errors_without_a_traceback() -> None:
     result = runner.invoke(app, ["simulate", "no-such-scenario"])
     assert result.exit_code == 2
     assert "unknown scenario" in result.output
+
+
+def test_tune_detect_evaluate_round_trip(tmp_path) -> None:
+    spec = copy.deepcopy(load_scenario("panda-gaz").spec)
+    spec["duration"] = 4.0
+    spec["random_collisions"] = {**spec["random_collisions"], "count": 1}
+    scenario = tmp_path / "panda-gaz.yaml"
+    scenario.write_text(yaml.safe_dump(spec))
+    free, hit = tmp_path / "free.parquet", tmp_path / "hit.parquet"
+    for path, flag, seed in ((free, "--no-collisions", "1"), (hit, "--collisions", "2")):
+        result = runner.invoke(
+            app, ["simulate", str(scenario), "-o", str(path), flag, "--seed", seed]
+        )
+        assert result.exit_code == 0, result.output
+    thresholds = tmp_path / "tv.yaml"
+    result = runner.invoke(
+        app,
+        ["tune", "--method", "time-variant", str(free), "-o", str(thresholds), "--margin", "0.1"],
+    )
+    assert result.exit_code == 0, result.output
+    assert "method: time_variant" in thresholds.read_text()
+    result = runner.invoke(app, ["detect", str(hit), "--thresholds", str(thresholds)])
+    assert result.exit_code == 0, result.output
+    assert "event(s) detected by time_variant" in result.output
+    result = runner.invoke(app, ["evaluate", str(hit), "--thresholds", str(thresholds)])
+    assert result.exit_code == 0, result.output
+    assert "n_detected" in result.output
+    result = runner.invoke(app, ["tune", "--method", "magic", str(free)])
+    assert result.exit_code == 2 and "unknown threshold method" in result.output

@@ -189,9 +189,7 @@ def tune_command(
 def _detect(log_path: Path, thresholds: Path, robot: str | None) -> tuple[Log, str, list[Event]]:
     log = read_log(log_path)
     threshold, settings = load_tuned(thresholds)
-    monitor = CollisionMonitor(
-        _nominal_robot(robot, log), threshold, settings, min_duration=0.005, hold=0.05
-    )
+    monitor = CollisionMonitor(_nominal_robot(robot, log), threshold, settings)
     return log, threshold.name, monitor.run(log)[1]
 
 

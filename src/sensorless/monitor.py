@@ -237,7 +237,10 @@ class CollisionMonitor:
     dt : float, optional
         Sample period of the stream [s]; default the threshold's.
     min_duration, hold : float
-        Event filtering of :class:`~sensorless.detection.Detector` [s].
+        Event filtering of :class:`~sensorless.detection.Detector` [s]: an
+        excursion shorter than ``min_duration`` is not an event, and excursions
+        closer than ``hold`` are one event (defaults 5 ms and 50 ms: one
+        collision gives one event, not a burst of fragments).
     """
 
     def __init__(
@@ -247,8 +250,8 @@ class CollisionMonitor:
         settings: ObserverSettings,
         *,
         dt: float | None = None,
-        min_duration: float = 0.0,
-        hold: float = 0.0,
+        min_duration: float = 0.005,
+        hold: float = 0.05,
     ) -> None:
         if robot.n_dof != threshold.n_dof_:
             raise DimensionError(

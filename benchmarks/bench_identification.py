@@ -1,7 +1,7 @@
 """Inertial identification on 30 minutes of 1 kHz data of the 7-joint Panda (issue 5).
 
 Random states stand in for a recorded excitation; the torques are the
-panda_gaz inverse dynamics plus its sigmoid friction and noise. The data are
+panda_gaz inverse dynamics plus white noise (0.05 N m). The data are
 made and consumed one segment at a time, as a reader of a long log would, so
 peak memory stays that of one segment. Prints wall time and peak RSS.
 

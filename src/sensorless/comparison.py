@@ -168,10 +168,11 @@ def compare(
             # regressor calls each): the costliest fit by far.
             fit_runs = fit_runs[:model_tuning_runs]
         threshold = make_threshold(method, nominal, **options).fit(fit_runs)
-        detector = Detector(threshold, min_duration=min_duration, hold=hold)
+        # One pass gives both bounds and events (the model-based bound is costly).
+        detection = Detector(threshold, min_duration=min_duration, hold=hold).run(signals[kind])
         thresholds[method] = threshold
-        bounds[method] = threshold.bounds(signals[kind])
-        events[method] = detector.detect(signals[kind])
+        bounds[method] = (detection.lower, detection.upper)
+        events[method] = detection.events
         evaluations[method] = evaluate(events[method], test, method=method)
     return Comparison(
         scenario.name,

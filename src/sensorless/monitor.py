@@ -26,7 +26,13 @@ from .detection import Detector, DetectorState, Verdict
 from .exceptions import DimensionError, InputTypeError, InputValueError, UnknownNameError
 from .filters import Butterworth, CausalEstimator, DirtyDerivative, FiniteDifference
 from .io import Log
-from .observers import AccelerationObserver, MomentumObserver, default_estimator, observe
+from .observers import (
+    AccelerationObserver,
+    MomentumObserver,
+    ObserverSample,
+    default_estimator,
+    observe,
+)
 from .robots.model import RobotModel
 from .signals import Event, ObserverSignals
 from .thresholds import (
@@ -325,17 +331,24 @@ class CollisionMonitor:
         if state is None:
             initial = self._estimator.initial_state(q_arr)
             estimator = (initial.position, initial.velocity, initial.acceleration)
-            if kind == "acceleration":
-                observer = self._observer.initial_state(q_arr)
-            else:
-                observer = self._observer.initial_state(q_arr, np.zeros_like(q_arr))
+            # The acceleration observer's only state is the estimator's, kept above.
+            observer = (
+                None
+                if kind == "acceleration"
+                else self._observer.initial_state(q_arr, np.zeros_like(q_arr))
+            )
             state = _StreamState(time, estimator, observer, self.detector.initial_state(self.dt))
         # Dot products propagate NaN/inf: ``total`` is finite when every value the
         # detector checks is (a huge finite value that merely overflows takes the
         # fully checked path, with the same result).
         if kind == "acceleration":
-            sample, state.observer = self._observer.step(state.observer, q_arr, tau)
+            # One pass of the estimator feeds both the observer and the threshold.
             velocity, acceleration = self._derivatives(state, q_arr)
+            assert acceleration is not None  # always selected for this observer
+            estimate = self._observer._estimate(
+                q_arr[None], velocity[None], acceleration[None], tau[None]
+            )
+            sample = ObserverSample(*(row[0] for row in estimate))
             total = velocity @ velocity + sum(row @ row for row in sample)
         else:
             velocity, acceleration = self._derivatives(state, q_arr)

@@ -71,3 +71,86 @@ def test_tune_detect_evaluate_round_trip(tmp_path) -> None:
     assert "n_detected" in result.output
     result = runner.invoke(app, ["tune", "--method", "magic", str(free)])
     assert result.exit_code == 2 and "unknown threshold method" in result.output
+
+
+def test_identify_friction_from_a_simulated_sweep(tmp_path) -> None:
+    """`simulate` a sweep of planar2 with planted Coulomb friction, then `identify friction`."""
+    spec = {
+        "name": "planar2-sweep",
+        "duration": 15.0,
+        "robot": "planar2",
+        "true_friction": {"type": "coulomb", "c_pos": [0.8, 0.5], "c_neg": [-0.6, -0.4]},
+        "controller": {
+            "kp": [4000.0, 2000.0],
+            "kd": [200.0, 100.0],
+            "ki": 0.0,
+            "gravity_compensation": True,
+            "friction_compensation": False,
+        },
+        "trajectory": {
+            "type": "velocity_sweep",
+            "joints": [1, 2],
+            "velocities": [-0.5, 0.5, -1.0, 1.0],
+            "hold": 1.2,
+            "ramp": 0.3,
+        },
+    }
+    scenario = tmp_path / "sweep.yaml"
+    scenario.write_text(yaml.safe_dump(spec))
+    log = tmp_path / "sweep.parquet"
+    result = runner.invoke(app, ["simulate", str(scenario), "-o", str(log)])
+    assert result.exit_code == 0, result.output
+    out = tmp_path / "friction.yaml"
+    result = runner.invoke(
+        app, ["identify", "friction", str(log), "--robot", "planar2", "-o", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    content = yaml.safe_load(out.read_text())
+    assert out.with_suffix(".html").is_file()
+    joints = content[str(log)]["joints"]
+    coulomb = {j["joint"]: j["models"]["coulomb"] for j in joints}
+    planted = {1: (0.8, -0.6), 2: (0.5, -0.4)}
+    for joint, (c_pos, c_neg) in planted.items():
+        assert abs(coulomb[joint]["c_pos"] - c_pos) < 0.02, coulomb
+        assert abs(coulomb[joint]["c_neg"] - c_neg) < 0.02, coulomb
+    result = runner.invoke(
+        app, ["identify", "friction", str(log), "--robot", "panda", "-o", str(out)]
+    )
+    assert result.exit_code == 2 and "joints" in result.output
+
+
+def test_identify_inertial_and_excite(tmp_path) -> None:
+    log = tmp_path / "run.parquet"
+    spec = copy.deepcopy(load_scenario("panda-gaz").spec)
+    spec["duration"] = 15.0
+    spec.pop("random_collisions")
+    scenario = tmp_path / "short.yaml"
+    scenario.write_text(yaml.safe_dump(spec))
+    assert runner.invoke(app, ["simulate", str(scenario), "-o", str(log)]).exit_code == 0
+    out = tmp_path / "inertial.yaml"
+    result = runner.invoke(
+        app, ["identify", "inertial", str(log), "--robot", "panda_gaz", "-o", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    content = yaml.safe_load(out.read_text())
+    assert content["statistics"]["r_squared"] > 0.99
+    assert "mY2R" in content["parameters"] or len(content["parameters"]) > 40
+    result = runner.invoke(app, ["identify", "inertial", str(log), "--robot", "puma560"])
+    assert result.exit_code == 2 and "joints" in result.output
+    trajectory = tmp_path / "excite.yaml"
+    result = runner.invoke(
+        app,
+        [
+            "excite",
+            "--robot",
+            "panda",
+            "-o",
+            str(trajectory),
+            "--harmonics",
+            "1",
+            "--iterations",
+            "3",
+        ],
+    )
+    assert result.exit_code == 0, result.output
+    assert yaml.safe_load(trajectory.read_text())["trajectory"]["type"] == "fourier"

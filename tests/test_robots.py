@@ -592,7 +592,7 @@ def test_models_are_immutable(planar: sl.RobotModel) -> None:
 
 # --------------------------------------------------------------------------- registry
 def test_available_and_load() -> None:
-    assert sl.robots.available() == ["panda", "panda_gaz", "planar2", "puma560"]
+    assert sl.robots.available() == ["lwr4", "panda", "panda_gaz", "planar2", "puma560"]
     for name, n_dof in {"panda": 7, "panda_gaz": 7, "planar2": 2, "puma560": 6}.items():
         robot = sl.robots.load(name)
         assert robot.n_dof == n_dof

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import numpy as np
 import pandas as pd
 import typer
+import yaml
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
 from rich.table import Table
@@ -18,13 +20,18 @@ from .comparison import compare, write_comparison_report
 from .detection import events_to_pandas
 from .evaluation import comparison_table, evaluate, summary_table
 from .exceptions import InputValueError, SensorlessError
+from .identification.excitation import optimize_excitation
+from .identification.friction import identify_friction
+from .identification.logs import identify_from_logs
 from .io import Log, read_log, write_log
 from .monitor import METHOD_NAMES, CollisionMonitor, ObserverSettings, load_tuned, save_tuned, tune
+from .report import write_report
 from .robots.base_parameters import base_parameters
 from .robots.model import RobotModel
 from .signals import Event
 from .simulation.scenario import available_scenarios, load_scenario
 from .simulation.simulator import SimulationResult
+from .thresholds import CombinedVelocityThreshold
 
 app = typer.Typer(
     name="sensorless",
@@ -137,10 +144,13 @@ def simulate_command(
     )
 
 
-def _nominal_robot(robot: str | None, log: Log) -> RobotModel:
-    """The nominal model: a built-in name, a URDF path, ``scenario:NAME``, or the log's scenario."""
+def _nominal_robot(robot: str | None, log: Log | None, kind: str = "motor") -> RobotModel:
+    """The nominal model: a built-in name, a URDF path, ``scenario:NAME``, or the log's scenario.
+
+    A scenario gives the model the observer ``kind`` needs (:meth:`Scenario.nominal`).
+    """
     if robot is None:
-        scenario = log.metadata.get("scenario")
+        scenario = None if log is None else log.metadata.get("scenario")
         if not scenario:
             raise InputValueError(
                 "give --robot (a built-in name, a URDF file or scenario:NAME); "
@@ -148,7 +158,7 @@ def _nominal_robot(robot: str | None, log: Log) -> RobotModel:
             )
         robot = f"scenario:{scenario}"
     if robot.startswith("scenario:"):
-        return load_scenario(robot.split(":", 1)[1]).robots()[1]
+        return load_scenario(robot.split(":", 1)[1]).nominal(kind)
     if robot.endswith(".urdf"):
         return RobotModel.from_urdf(robot)
     return robot_registry.load(robot)
@@ -177,8 +187,8 @@ def tune_command(
     """Fit a threshold family on collision-free logs and save it with its observer settings."""
     try:
         runs = [read_log(path) for path in logs]
-        nominal = _nominal_robot(robot, runs[0])
         settings = ObserverSettings(kind=kind or METHOD_NAMES.get(method, "motor"), gain=gain)
+        nominal = _nominal_robot(robot, runs[0], settings.kind)
         threshold, settings = tune(runs, nominal, method, settings, margin=margin)
         path = save_tuned(output, threshold, settings)
     except SensorlessError as exc:
@@ -189,7 +199,7 @@ def tune_command(
 def _detect(log_path: Path, thresholds: Path, robot: str | None) -> tuple[Log, str, list[Event]]:
     log = read_log(log_path)
     threshold, settings = load_tuned(thresholds)
-    monitor = CollisionMonitor(_nominal_robot(robot, log), threshold, settings)
+    monitor = CollisionMonitor(_nominal_robot(robot, log, settings.kind), threshold, settings)
     return log, threshold.name, monitor.run(log)[1]
 
 
@@ -246,11 +256,19 @@ def demo_command(
     console.print(robot_summary())
     output.mkdir(parents=True, exist_ok=True)
     comparisons = []
-    for name, joints in DEMO_SCENARIOS.items():
+    for name, (joints, residuals, duration) in DEMO_SCENARIOS.items():
         scenario = load_scenario(name)
         if quick:
             scenario = scenario.with_duration(20.0)
-        comparison = compare(scenario, joints=joints, progress=lambda text: console.log(text))
+        elif duration is not None:
+            scenario = scenario.with_duration(duration)
+        comparison = compare(
+            scenario,
+            joints=joints,
+            residuals=residuals,
+            workers=min(3, os.cpu_count() or 1),
+            progress=lambda text: console.log(text),
+        )
         comparisons.append(comparison)
         write_log(comparison.test_log, output / f"{name}-collision.parquet")
         console.print(f"[bold]{name}[/] (monitored joints: {list(joints) if joints else 'all'})")
@@ -259,16 +277,157 @@ def demo_command(
         efficiency = comparison.efficiency()
         if efficiency is not None:
             _print_table(efficiency)
-        for method, threshold in comparison.thresholds.items():
-            save_tuned(
-                output / f"{name}-{method}.yaml", threshold, ObserverSettings(kind=threshold.kind_)
-            )
+        for label, threshold in comparison.thresholds.items():
+            kind = comparison.kinds[label]
+            if isinstance(threshold, CombinedVelocityThreshold):
+                threshold = threshold.for_kind(kind)
+            slug = label.replace(" (joint)", "-joint")
+            save_tuned(output / f"{name}-{slug}.yaml", threshold, ObserverSettings(kind=kind))
     report = write_comparison_report(comparisons, output / "report.html")
     console.print(f"report: {report}")
 
 
-#: Scenarios of the demo and the joints it monitors (thesis §5.4 watches PUMA joints 1-3).
-DEMO_SCENARIOS: dict[str, tuple[int, ...] | None] = {"puma560-thesis": (1, 2, 3), "panda-gaz": None}
+#: Scenarios of the demo: monitored joints (the thesis watches joints 1-3 of the PUMA and of
+#: the LWR), the residuals watched and the simulated time [s] (None: the scenario's; the
+#: LWR run is cut after its last contact, at 98.4 s, to keep the demo short).
+DEMO_SCENARIOS: dict[str, tuple[tuple[int, ...] | None, tuple[str, ...], float | None]] = {
+    "puma560-thesis": ((1, 2, 3), ("motor",), None),
+    "panda-gaz": (None, ("motor",), None),
+    "lwr4-thesis": ((1, 2, 3), ("motor", "joint"), 100.0),
+}
+
+
+identify_app = typer.Typer(help="Identify friction and inertial parameters from logs.")
+app.add_typer(identify_app, name="identify")
+
+
+def _write_yaml(path: Path, content: dict[str, Any]) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(yaml.safe_dump(content, sort_keys=False, allow_unicode=True), encoding="utf-8")
+    return path
+
+
+@identify_app.command("friction")
+def identify_friction_command(
+    logs: Annotated[list[Path], typer.Argument(help="Constant-velocity sweep logs.")],
+    robot: Annotated[
+        str | None, typer.Option("--robot", help="Nominal model for g(q) (default: the log's).")
+    ] = None,
+    output: Annotated[
+        Path, typer.Option("-o", "--output", help="Result file (YAML); a .html report beside it.")
+    ] = Path("friction.yaml"),
+    torque: Annotated[
+        str, typer.Option("--torque", help="motor (eq. 2.6) or joint (eq. 2.10) torques.")
+    ] = "motor",
+) -> None:
+    """Friction maps and Coulomb, Coulomb + viscous and Stribeck fits from sweeps (§2.4.1)."""
+    try:
+        results = []
+        for path in logs:
+            log = read_log(path)
+            model = _nominal_robot(robot, log, "joint" if torque == "joint" else "motor")
+            results.append((path, identify_friction(log, model, torque=torque)))
+    except SensorlessError as exc:
+        raise _fail(exc) from None
+    _write_yaml(output, {str(path): result.to_dict() for path, result in results})
+    sections: list[tuple[str, Any]] = [
+        (str(path), [result.to_pandas(), result.plot()]) for path, result in results
+    ]
+    report = write_report(
+        output.with_suffix(".html"), title="sensorless: friction identification", sections=sections
+    )
+    for path, result in results:
+        console.print(f"[bold]{path}[/]")
+        _print_table(result.to_pandas())
+    console.print(f"wrote {output} and {report}")
+
+
+@identify_app.command("inertial")
+def identify_inertial_command(
+    logs: Annotated[list[Path], typer.Argument(help="Logs of the moving robot.")],
+    robot: Annotated[str, typer.Option("--robot", help="Built-in name, URDF or scenario:NAME.")],
+    output: Annotated[
+        Path, typer.Option("-o", "--output", help="Result file (YAML); a .html report beside it.")
+    ] = Path("inertial.yaml"),
+    torque: Annotated[str, typer.Option("--torque", help="motor or joint torques.")] = "motor",
+    zero: Annotated[
+        list[str] | None, typer.Option("--zero", help="Standard parameter known to be zero.")
+    ] = None,
+) -> None:
+    """Base inertial and friction parameters by least squares (eq. 2.12-2.13)."""
+    try:
+        runs = [read_log(path) for path in logs]
+        model = _nominal_robot(robot, runs[0], "joint" if torque == "joint" else "motor")
+        base, result = identify_from_logs(runs, model, torque=torque, zero=zero or ())
+    except SensorlessError as exc:
+        raise _fail(exc) from None
+    table = result.to_pandas()
+    nominal = dict(zip(base.names, base.values, strict=True))
+    table.insert(0, "nominal", [nominal.get(name, np.nan) for name in table.index])
+    table.insert(0, "formula", [base.formula(n) if n in nominal else "" for n in table.index])
+    stats = {
+        "r_squared": result.r_squared,
+        "residual_std [N m]": result.residual_std,
+        "condition_number": result.condition_number,
+        "n_rows": result.n_samples,
+    }
+    _write_yaml(
+        output,
+        {
+            "robot": model.name,
+            "torque": torque,
+            "logs": [str(path) for path in logs],
+            "statistics": stats,
+            "units": "kg m² (XX..ZZ, Ia), kg m (mX..mZ), kg (m), N m (c_pos, c_neg), "
+            "N m s/rad (fv)",
+            "parameters": {
+                name: {
+                    key: float(value) if key != "formula" else value for key, value in row.items()
+                }
+                for name, row in table.to_dict(orient="index").items()
+            },
+        },
+    )
+    report = write_report(
+        output.with_suffix(".html"),
+        title=f"sensorless: inertial identification of {model.name}",
+        sections=[("Statistics", pd.Series(stats)), ("Parameters", table)],
+    )
+    _print_table(table)
+    console.print(f"R² = {result.r_squared:.6f}; wrote {output} and {report}")
+
+
+@app.command("excite")
+def excite_command(
+    robot: Annotated[str, typer.Option("--robot", help="Built-in name or URDF.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Trajectory (YAML).")] = Path(
+        "excitation.yaml"
+    ),
+    harmonics: Annotated[int, typer.Option("--harmonics", help="Fourier harmonics.")] = 5,
+    frequency: Annotated[
+        float, typer.Option("--frequency", help="Fundamental frequency [Hz].")
+    ] = 0.1,
+    seed: Annotated[int, typer.Option("--seed", help="Seed of the random starts.")] = 0,
+    iterations: Annotated[int, typer.Option("--iterations", help="SLSQP iterations.")] = 100,
+) -> None:
+    """Optimise a Fourier excitation trajectory (Swevers 1997) for the base regressor."""
+    try:
+        model = _nominal_robot(robot, None)
+        result = optimize_excitation(
+            model,
+            n_harmonics=harmonics,
+            base_frequency=frequency,
+            seed=seed,
+            max_iterations=iterations,
+        )
+        path = result.to_yaml(output)
+    except SensorlessError as exc:
+        raise _fail(exc) from None
+    _print_table(result.to_pandas())
+    console.print(
+        f"condition number {result.initial_condition_number:.4g} -> "
+        f"{result.condition_number:.4g}; wrote {path}"
+    )
 
 
 def main() -> None:

@@ -10,6 +10,7 @@ into a self-contained HTML report with tables and figures.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -19,13 +20,19 @@ import pandas as pd
 
 from .detection import Detector
 from .evaluation import Evaluation, comparison_table, efficiency_table, evaluate, summary_table
+from .exceptions import InputValueError
 from .io import Log
 from .monitor import METHOD_NAMES, ObserverSettings, make_threshold
 from .plots import plot_residuals
 from .report import write_report
 from .signals import Event, ObserverSignals
 from .simulation.scenario import Scenario
-from .thresholds import ConstantThreshold, Threshold, TimeVariantThreshold
+from .thresholds import (
+    CombinedVelocityThreshold,
+    ConstantThreshold,
+    Threshold,
+    TimeVariantThreshold,
+)
 
 __all__ = ["Comparison", "compare", "write_comparison_report"]
 
@@ -46,7 +53,7 @@ class Comparison:
     evaluations : dict
         :class:`~sensorless.evaluation.Evaluation` per method on the test run.
     signals : dict
-        Observer signals of the test run per observer kind ("motor", "acceleration").
+        Observer signals of the test run per observer kind ("motor", "joint", "acceleration").
     bounds : dict
         (lower, upper) of each method on the test run.
     events : dict
@@ -55,6 +62,8 @@ class Comparison:
         The collision run.
     seeds : dict
         Seeds of the tuning and test runs.
+    kinds : dict
+        Observer kind each method label watches ("motor", "joint", "acceleration").
     """
 
     scenario: str
@@ -66,6 +75,7 @@ class Comparison:
     events: dict[str, list[Event]]
     test_log: Log
     seeds: dict[str, Any] = field(default_factory=dict)
+    kinds: dict[str, str] = field(default_factory=dict)
 
     def summary(self) -> pd.DataFrame:
         """One row per method: detected/total, false alarms, delays (Table 5.4 summary)."""
@@ -91,6 +101,11 @@ class Comparison:
         return table
 
 
+def _simulate(job: tuple[Scenario, int, bool]) -> Log:
+    scenario, seed, collisions = job
+    return scenario.run(seed=seed, collisions=collisions).log
+
+
 def compare(
     scenario: Scenario,
     *,
@@ -102,6 +117,8 @@ def compare(
     min_duration: float = 0.005,
     hold: float = 0.05,
     model_tuning_runs: int = 1,
+    residuals: Sequence[str] = ("motor",),
+    workers: int = 1,
     progress: Callable[[str], None] | None = None,
 ) -> Comparison:
     """Tune every method on collision-free runs of ``scenario`` and evaluate on a collision run.
@@ -128,38 +145,64 @@ def compare(
     model_tuning_runs : int
         Tuning runs the model-based threshold is fitted on (its fit is the
         slowest: the split regressor at every sample).
+    residuals : sequence of {"motor", "joint"}
+        Residuals the momentum methods watch: r̂ from motor torques (eq. 4.4)
+        and, on a robot with joint torque sensors, r̂_s (eq. 4.9). Methods
+        on r̂_s are labelled ``"<method> (joint)"``; each residual's margin
+        comes from its own constant β.
+    workers : int
+        Processes that simulate the runs in parallel (1: in this process).
+        The logs do not depend on it.
     progress : callable(str), optional
         Told what is being done.
     """
     say = progress or (lambda _: None)
+    if not residuals or set(residuals) - {"motor", "joint"}:
+        raise InputValueError(
+            f"residuals must be a non-empty subset of ('motor', 'joint'); got {residuals!r}"
+        )
+    if not isinstance(workers, int) or workers < 1:
+        raise InputValueError(f"workers must be a positive integer; got {workers!r}")
     children = np.random.SeedSequence(master_seed).spawn(n_tuning + 1)
     seeds = [int(child.generate_state(1)[0]) for child in children]
-    tuning: list[Log] = []
-    for index, seed in enumerate(seeds[:-1]):
-        say(f"{scenario.name}: collision-free run {index + 1}/{n_tuning}")
-        tuning.append(scenario.run(seed=seed, collisions=False).log)
-    say(f"{scenario.name}: collision run")
-    test = scenario.run(seed=seeds[-1]).log
-    nominal = scenario.robots()[1]
+    jobs = [(scenario, seed, index == n_tuning) for index, seed in enumerate(seeds)]
+    say(f"{scenario.name}: simulating {n_tuning} collision-free runs and a collision run")
+    if workers > 1:
+        with ProcessPoolExecutor(max_workers=min(workers, len(jobs))) as pool:
+            logs = list(pool.map(_simulate, jobs))
+    else:
+        logs = [_simulate(job) for job in jobs]
+    tuning, test = logs[:-1], logs[-1]
     joint_tuple = None if joints is None else tuple(int(j) for j in joints)
 
+    # (label, method, observer kind): momentum methods watch every requested residual.
+    plan = []
+    for method in methods:
+        watched = METHOD_NAMES[method]
+        for kind in residuals if watched == "motor" else (watched,):
+            plan.append((method if kind == "motor" else f"{method} ({kind})", method, kind))
     # One observer pass per residual kind, shared by every method that watches it.
-    kinds = {METHOD_NAMES[method] for method in ("constant", *methods)}
+    kinds = {kind for _, _, kind in plan} | set(residuals)
+    nominal = {kind: scenario.nominal(kind) for kind in kinds}
     settings = {kind: ObserverSettings(kind=kind) for kind in kinds}
-    tuning_signals = {k: [settings[k].observe(log, nominal) for log in tuning] for k in kinds}
-    signals = {kind: settings[kind].observe(test, nominal) for kind in kinds}
+    tuning_signals = {k: [settings[k].observe(log, nominal[k]) for log in tuning] for k in kinds}
+    signals = {kind: settings[kind].observe(test, nominal[kind]) for kind in kinds}
 
-    constant = make_threshold("constant", nominal, joints=joint_tuple).fit(tuning_signals["motor"])
-    assert isinstance(constant, ConstantThreshold)
-    margin = margin_fraction * constant.beta_
+    # The margin of every method is a fraction of the constant β of the residual it watches.
+    margins = {}
+    for kind in residuals:
+        constant = make_threshold("constant", nominal[kind], joints=joint_tuple)
+        constant.fit(tuning_signals[kind])
+        assert isinstance(constant, ConstantThreshold)
+        margins[kind] = margin_fraction * constant.beta_
+    margins["acceleration"] = margins["motor" if "motor" in residuals else "joint"]
     thresholds: dict[str, Threshold] = {}
     evaluations: dict[str, Evaluation] = {}
     bounds: dict[str, tuple[FloatArray, FloatArray]] = {}
     events: dict[str, list[Event]] = {}
-    for method in methods:
-        say(f"{scenario.name}: tuning and detecting with {method}")
-        kind = METHOD_NAMES[method]
-        options: dict[str, Any] = {"joints": joint_tuple, "margin": margin}
+    for label, method, kind in plan:
+        say(f"{scenario.name}: tuning and detecting with {label}")
+        options: dict[str, Any] = {"joints": joint_tuple, "margin": margins[kind]}
         if method in ("time-variant", "hysteretic"):
             options["fit_method"] = "minimax"
         fit_runs = tuning_signals[kind]
@@ -167,13 +210,31 @@ def compare(
             # Its bound needs the split regressor at every sample (l Pinocchio
             # regressor calls each): the costliest fit by far.
             fit_runs = fit_runs[:model_tuning_runs]
-        threshold = make_threshold(method, nominal, **options).fit(fit_runs)
+        threshold = make_threshold(method, nominal[kind], **options).fit(fit_runs)
         # One pass gives both bounds and events (the model-based bound is costly).
         detection = Detector(threshold, min_duration=min_duration, hold=hold).run(signals[kind])
-        thresholds[method] = threshold
-        bounds[method] = (detection.lower, detection.upper)
-        events[method] = detection.events
-        evaluations[method] = evaluate(events[method], test, method=method)
+        thresholds[label] = threshold
+        bounds[label] = (detection.lower, detection.upper)
+        events[label] = detection.events
+        evaluations[label] = evaluate(events[label], test, method=label)
+    if "velocity" in methods and {"motor", "joint"} <= set(residuals):
+        # Both residuals of the same runs: one fit with a shared γ (eq. 4.21, 4.47).
+        say(f"{scenario.name}: tuning and detecting with velocity-combined")
+        combined = CombinedVelocityThreshold(joints=joint_tuple).fit(
+            list(zip(tuning_signals["motor"], tuning_signals["joint"], strict=True))
+        )
+        for kind in ("motor", "joint"):
+            label = "velocity-combined" + ("" if kind == "motor" else " (joint)")
+            single = combined.for_kind(kind)
+            # Fitted without margin: each residual gets the margin of its own β.
+            single.lower_ = single.lower_ - margins[kind]
+            single.upper_ = single.upper_ + margins[kind]
+            detection = Detector(single, min_duration=min_duration, hold=hold).run(signals[kind])
+            thresholds[label] = combined
+            bounds[label] = (detection.lower, detection.upper)
+            events[label] = detection.events
+            evaluations[label] = evaluate(events[label], test, method=label)
+            plan.append((label, "velocity", kind))
     return Comparison(
         scenario.name,
         joint_tuple,
@@ -184,6 +245,7 @@ def compare(
         events,
         test,
         {"tuning": seeds[:-1], "test": seeds[-1], "master": master_seed},
+        {label: kind for label, _, kind in plan},
     )
 
 
@@ -202,7 +264,7 @@ def write_comparison_report(comparisons: Sequence[Comparison], path: str | Path)
         if efficiency is not None:
             items.append(efficiency)
         for kind, kind_signals in comparison.signals.items():
-            kind_methods = [m for m in comparison.bounds if METHOD_NAMES[m] == kind]
+            kind_methods = [m for m in comparison.bounds if comparison.kinds.get(m) == kind]
             items.append(
                 plot_residuals(
                     kind_signals,

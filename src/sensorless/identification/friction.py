@@ -11,8 +11,9 @@ parameters sigma0, sigma1 are fitted to small presliding motion
 (:func:`fit_lugre_dynamic`, Canudas de Wit et al. 1995).
 
 Sign convention and units are those of :mod:`sensorless.friction`: the
-friction torque [N m] has the sign of the joint velocity [rad/s]. All
-functions work on one joint; arrays have shape ``(n_samples,)``. Fits return
+friction torque [N m] has the sign of the joint velocity [rad/s]. The map
+and fit functions work on one joint; arrays have shape ``(n_samples,)``;
+:func:`identify_friction` runs them on every swept joint of a log. Fits return
 a :class:`FrictionFit` holding the fitted model (with ``n_dof = 1``) and its
 RMS residual.
 """
@@ -24,20 +25,26 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
 from scipy.optimize import least_squares, lsq_linear
 
 from .._validation import FloatArray
 from ..exceptions import DimensionError, InputTypeError, InputValueError
+from ..filters import SavitzkyGolay
 from ..friction import Coulomb, CoulombViscous, FrictionModel, LuGre, Stribeck
+from ..io import Log
+from ..robots.model import RobotModel
 
 __all__ = [
     "FrictionFit",
+    "FrictionIdentification",
     "fit_coulomb",
     "fit_coulomb_viscous",
     "fit_lugre_dynamic",
     "fit_stribeck",
+    "identify_friction",
     "plot_friction_map",
     "steady_state_map",
     "sweep_velocities",
@@ -547,3 +554,435 @@ def plot_friction_map(
     axes.legend()
     figure.tight_layout()
     return figure
+
+
+# ------------------------------------------------------------ whole-robot sweep logs
+_FITTERS = {
+    "coulomb": fit_coulomb,
+    "coulomb_viscous": fit_coulomb_viscous,
+    "stribeck": fit_stribeck,
+}
+_TORQUE_GROUPS = {"motor": "tau_m", "joint": "tau_j"}
+#: Units of the map columns and of every fitted parameter, for ``to_dict``.
+_UNITS = {
+    "velocity": "rad/s",
+    "torque": "N m",
+    "torque_std": "N m",
+    "c_pos": "N m",
+    "c_neg": "N m",
+    "fv": "N m s/rad",
+    "fc": "N m",
+    "fs": "N m",
+    "vs": "rad/s",
+    "rms": "N m",
+    "settle": "s",
+    "rest_velocity": "rad/s",
+    "max_acceleration": "rad/s^2",
+    "window": "s",
+}
+
+
+@dataclass(frozen=True)
+class FrictionIdentification:
+    """Friction maps and fitted models of the joints swept in one log.
+
+    Returned by :func:`identify_friction`.
+
+    Attributes
+    ----------
+    maps : DataFrame
+        Steady-state maps of all identified joints: columns ``joint``
+        (numbered from 1), ``velocity`` [rad/s], ``torque`` [N m],
+        ``torque_std`` [N m] and ``n_samples``, as :func:`steady_state_map`.
+    fits : dict of int to dict of str to FrictionFit
+        ``fits[joint][model]`` for each identified joint and requested model
+        (``"coulomb"``, ``"coulomb_viscous"``, ``"stribeck"``).
+    torque : {"motor", "joint"}
+        Torque the friction was computed from: ``tau_m - g(q)`` (eq. (2.6)
+        at constant velocity) or ``tau_j - g(q)`` (eq. (2.10), link side).
+    settle : float
+        Transient dropped at the start of each plateau [s].
+    tolerance : float
+        Relative velocity tolerance of a plateau [-].
+    rest_velocity : float
+        Speed [rad/s] under which a joint counted as resting.
+    max_acceleration : float
+        Largest acceleration [rad/s²] of a steady-state sample.
+    window : float
+        Length of the Savitzky-Golay velocity window [s].
+    """
+
+    maps: pd.DataFrame
+    fits: dict[int, dict[str, FrictionFit]]
+    torque: str
+    settle: float
+    tolerance: float
+    rest_velocity: float
+    max_acceleration: float
+    window: float
+
+    @property
+    def joints(self) -> tuple[int, ...]:
+        """Identified joints, numbered from 1, in increasing order."""
+        return tuple(sorted(self.fits))
+
+    def joint_map(self, joint: int) -> pd.DataFrame:
+        """Steady-state map of one identified joint (columns of :func:`steady_state_map`)."""
+        if joint not in self.fits:
+            raise InputValueError(
+                f"joint {joint!r} was not identified; identified joints: {list(self.joints)}"
+            )
+        rows = self.maps[self.maps["joint"] == joint].drop(columns="joint")
+        return rows.reset_index(drop=True)
+
+    def to_pandas(self) -> pd.DataFrame:
+        """One row per joint and model: ``joint``, ``model``, the parameters, ``rms``.
+
+        Parameters a model does not have are NaN; ``n_plateaus`` counts the
+        points of the joint's map.
+        """
+        counts = self.maps.groupby("joint").size()
+        rows = [
+            {
+                "joint": joint,
+                "model": name,
+                **fit.parameters,
+                "rms": fit.rms,
+                "n_plateaus": int(counts[joint]),
+            }
+            for joint in self.joints
+            for name, fit in self.fits[joint].items()
+        ]
+        parameters = dict.fromkeys(
+            key for row in rows for key in row if key not in ("joint", "model", "rms", "n_plateaus")
+        )
+        return pd.DataFrame(rows, columns=["joint", "model", *parameters, "rms", "n_plateaus"])
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain Python values (lists, floats, str) for a YAML or JSON file, SI units.
+
+        Returns
+        -------
+        dict
+            ``torque``, ``settle``, ``tolerance``, ``rest_velocity``,
+            ``max_acceleration``, ``window``, a ``units`` entry naming the unit of every number, and
+            ``joints``: a list with, per joint, its number, its map (lists
+            ``velocity``, ``torque``, ``torque_std``, ``n_samples``) and its
+            fitted ``models`` (parameters and ``rms`` by model name).
+        """
+        joints = []
+        for joint in self.joints:
+            table = self.joint_map(joint)
+            joints.append(
+                {
+                    "joint": int(joint),
+                    "map": {
+                        column: [float(v) for v in table[column]]
+                        for column in ("velocity", "torque", "torque_std")
+                    }
+                    | {"n_samples": [int(v) for v in table["n_samples"]]},
+                    "models": {
+                        name: {**{k: float(v) for k, v in fit.parameters.items()}, "rms": fit.rms}
+                        for name, fit in self.fits[joint].items()
+                    },
+                }
+            )
+        return {
+            "torque": self.torque,
+            "settle": float(self.settle),
+            "tolerance": float(self.tolerance),
+            "rest_velocity": float(self.rest_velocity),
+            "max_acceleration": float(self.max_acceleration),
+            "window": float(self.window),
+            "units": dict(_UNITS),
+            "joints": joints,
+        }
+
+    def plot(self) -> Figure:
+        """Friction map and fitted curves, one panel per joint (Fig. 2.2).
+
+        Returns
+        -------
+        figure : matplotlib.figure.Figure
+        """
+        n = len(self.joints)
+        ncols = min(n, 4)
+        nrows = -(-n // ncols)
+        figure = Figure(figsize=(4.0 * ncols, 3.2 * nrows))
+        for k, joint in enumerate(self.joints):
+            axes = figure.add_subplot(nrows, ncols, k + 1)
+            _draw_friction_map(axes, self.joint_map(joint), self.fits[joint])
+            axes.set_title(f"joint {joint} ({self.torque} torque)")
+        figure.tight_layout()
+        return figure
+
+
+def _draw_friction_map(axes: Axes, map_df: pd.DataFrame, fits: dict[str, FrictionFit]) -> None:
+    """Measured map with error bars and one curve per fitted model on ``axes``."""
+    v = map_df["velocity"].to_numpy()
+    axes.errorbar(
+        v,
+        map_df["torque"].to_numpy(),
+        yerr=map_df["torque_std"].to_numpy(),
+        fmt="o",
+        markersize=3,
+        capsize=2,
+        color="0.2",
+        label="measured",
+    )
+    grid = np.linspace(v.min(), v.max(), 801)
+    grid = grid[grid != 0.0][:, None]
+    for name, fit in fits.items():
+        model = fit.model
+        curve = model.steady_state(grid) if isinstance(model, LuGre) else model.torque(grid)
+        axes.plot(grid[:, 0], curve[:, 0], "-", label=name)
+    axes.axhline(0.0, color="0.7", linewidth=0.5)
+    axes.axvline(0.0, color="0.7", linewidth=0.5)
+    axes.set_xlabel("joint velocity [rad/s]")
+    axes.set_ylabel("friction torque [N m]")
+    axes.legend(fontsize="small")
+
+
+def _check_options(**values: float) -> dict[str, float]:
+    """Check ``settle >= 0`` and the other options ``> 0``, all finite."""
+    out = {}
+    for name, value in values.items():
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            number = np.nan
+        bound = ">= 0" if name == "settle" else "> 0"
+        if not (np.isfinite(number) and (number >= 0.0 if name == "settle" else number > 0.0)):
+            raise InputValueError(
+                f"{name} must be a finite number {bound} [{_UNITS.get(name, '-')}]; got {value!r}"
+            )
+        out[name] = number
+    return out
+
+
+def _check_models(models: str | tuple[str, ...] | list[str]) -> tuple[str, ...]:
+    names = (models,) if isinstance(models, str) else tuple(models)
+    unknown = [name for name in names if name not in _FITTERS]
+    if not names or unknown:
+        raise InputValueError(
+            f"models must be a non-empty sequence of {sorted(_FITTERS)}; got {models!r}"
+        )
+    return names
+
+
+def _check_sweep_joints(joints: Any, n_dof: int) -> tuple[int, ...] | None:
+    if joints is None:
+        return None
+    values = np.atleast_1d(np.asarray(joints))
+    valid = values.ndim == 1 and values.size > 0 and values.dtype.kind in "iu"
+    if not valid or np.any((values < 1) | (values > n_dof)) or np.unique(values).size < values.size:
+        raise InputValueError(
+            f"joints must be distinct joint numbers from 1 to n_dof = {n_dof}; got {joints!r}"
+        )
+    return tuple(int(j) for j in values)
+
+
+def _friction_torque(log: Log, robot: RobotModel, torque: str) -> FloatArray:
+    """``tau - g(q)`` [N m]: the friction torque on a constant-velocity plateau."""
+    if torque not in _TORQUE_GROUPS:
+        raise InputValueError(f"torque must be one of {sorted(_TORQUE_GROUPS)}; got {torque!r}")
+    group = _TORQUE_GROUPS[torque]
+    tau = getattr(log, group)
+    if tau is None:
+        raise InputValueError(
+            f"torque={torque!r} needs the columns {group}_1..{group}_{log.n_dof} in the log; "
+            f"this log has none (use torque='motor' for the motor torque tau_m)"
+            if torque == "joint"
+            else f"torque='motor' needs the motor torque columns tau_m_1..tau_m_{log.n_dof} in "
+            f"the log; this log has none"
+        )
+    return np.asarray(tau - robot.gravity(log.q), dtype=np.float64)
+
+
+def identify_friction(
+    log: Log,
+    robot: RobotModel,
+    *,
+    joints: int | ArrayLike | None = None,
+    torque: str = "motor",
+    models: str | tuple[str, ...] | list[str] = ("coulomb", "coulomb_viscous", "stribeck"),
+    settle: float = 0.5,
+    tolerance: float = 0.02,
+    rest_velocity: float = 0.005,
+    max_acceleration: float = 0.1,
+    window: float = 0.1,
+) -> FrictionIdentification:
+    """Identify joint friction from a constant-velocity sweep log (thesis §2.4.1-2.4.2).
+
+    In the experiment each joint moves alone at constant velocities while
+    the others rest (e.g. :class:`sensorless.trajectories.VelocitySweep`).
+    With ``q̈ = 0`` and, the other joints at rest, no Coriolis or centrifugal
+    torque on the moving joint, its friction torque is
+
+    * ``tau_fr = tau_m - g(q)`` for ``torque="motor"`` (eq. (2.6) at constant
+      velocity; on a flexible arm this is the total, motor plus link, friction);
+    * ``tau_frL = tau_J - g(q)`` for ``torque="joint"`` (eq. (2.10), the
+      link-side friction seen by joint torque sensors),
+
+    with ``g`` the gravity of ``robot``. The velocity is estimated from the
+    measured ``q`` with a zero-phase :class:`sensorless.filters.SavitzkyGolay`
+    filter (ground-truth velocities in the log are not used). A sample
+    counts for joint ``j`` when ``|qd_j| > rest_velocity``, every other
+    joint is below it, and ``|qdd_j| <= max_acceleration`` (the ``q̈ = 0`` of
+    the method, enforced: at the edges of a plateau the velocity may still be
+    within tolerance while the inertia torque ``M_jj q̈_j`` is not negligible
+    against friction). The other samples are set to rest for joint ``j``, so
+    the sweeps of the other joints do not enter its map.
+    :func:`steady_state_map` then finds the plateaus (dropping ``settle``
+    seconds of transient from each) and the requested models are fitted
+    to the map.
+
+    Parameters
+    ----------
+    log : Log
+        Uniformly sampled run with ``tau_m`` (or ``tau_j``).
+    robot : RobotModel
+        Model whose gravity torque is removed; same joint count as the log.
+    joints : int or sequence of int, optional
+        Joints to identify, numbered from 1. By default every joint that
+        moves alone at a constant velocity somewhere in the log.
+    torque : {"motor", "joint"}, default "motor"
+        Torque the friction is computed from (see above).
+    models : sequence of {"coulomb", "coulomb_viscous", "stribeck"}
+        Models fitted to each map (:func:`fit_coulomb`,
+        :func:`fit_coulomb_viscous`, :func:`fit_stribeck`).
+    settle : float, default 0.5
+        Transient dropped at the start of each plateau [s], ``>= 0``.
+    tolerance : float, default 0.02
+        Relative velocity tolerance of a plateau [-], ``> 0``.
+    rest_velocity : float, default 0.005
+        Speed under which a joint counts as resting [rad/s]; half the
+        slowest velocity of the thesis's slow sweep by default.
+    max_acceleration : float, default 0.1
+        Largest acceleration of the moving joint in a steady-state sample
+        [rad/s²], ``> 0``. Raise it for noisy positions (the Savitzky-Golay
+        acceleration is noisier than the velocity).
+    window : float, default 0.1
+        Length of the Savitzky-Golay window [s] of the velocity and
+        acceleration estimates (cubic fit; at least 5 samples). Longer
+        windows average out the ripple of a flexible or stick-slipping joint
+        before the acceleration test; the plateaus must be much longer.
+
+    Returns
+    -------
+    FrictionIdentification
+
+    Raises
+    ------
+    InputTypeError
+        If ``log`` is not a :class:`~sensorless.io.Log` or ``robot`` not a
+        :class:`~sensorless.robots.model.RobotModel`.
+    DimensionError
+        If the log and the robot have different joint counts.
+    InputValueError
+        If an option is out of range, the log lacks the requested torque or
+        is not uniformly sampled, the robot stands still, no joint moves
+        alone at a constant velocity, a requested joint has no plateau, or
+        a fit fails (the message names the joint and the model).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sensorless.io import Log
+    >>> from sensorless.robots import load
+    >>> robot = load("planar2")
+    >>> t = np.arange(0.0, 8.0, 1e-3)
+    >>> v = np.select([t < 2, t < 4, t < 6], [0.5, -0.5, 1.0], -1.0)
+    >>> q = np.column_stack([np.cumsum(v) * 1e-3, np.zeros_like(t)])
+    >>> tau = robot.gravity(q) + np.column_stack([0.3 * np.sign(v) + 0.1 * v, 0 * t])
+    >>> result = identify_friction(Log(t=t, q=q, tau_m=tau), robot, models="coulomb_viscous")
+    >>> result.joints
+    (1,)
+    >>> {k: round(v, 4) for k, v in result.fits[1]["coulomb_viscous"].parameters.items()}
+    {'c_pos': 0.3, 'c_neg': -0.3, 'fv': 0.1}
+    """
+    if not isinstance(log, Log):
+        raise InputTypeError(f"log must be a sensorless.io.Log; got {type(log).__name__}")
+    if not isinstance(robot, RobotModel):
+        raise InputTypeError(f"robot must be a RobotModel; got {type(robot).__name__}")
+    if log.n_dof != robot.n_dof:
+        raise DimensionError(
+            f"the log has {log.n_dof} joints (columns q_1..q_{log.n_dof}) but robot "
+            f"{robot.name!r} has {robot.n_dof}; pass the model of the robot that made the log"
+        )
+    options = _check_options(
+        settle=settle,
+        tolerance=tolerance,
+        rest_velocity=rest_velocity,
+        max_acceleration=max_acceleration,
+        window=window,
+    )
+    names = _check_models(models)
+    chosen = _check_sweep_joints(joints, robot.n_dof)
+    friction = _friction_torque(log, robot, torque)
+    solo = _solo_velocities(log, options)
+    candidates = chosen or tuple(int(j) + 1 for j in np.flatnonzero(solo.any(axis=0)))
+    maps, fits = [], {}
+    for joint in candidates:
+        j = joint - 1
+        try:
+            table = steady_state_map(
+                log.t,
+                solo[:, j],
+                friction[:, j],
+                settle=options["settle"],
+                tolerance=options["tolerance"],
+            )
+        except InputValueError:
+            if chosen is None:
+                continue
+            raise InputValueError(
+                f"joint {joint} has no constant-velocity plateau longer than settle = "
+                f"{options['settle']:g} s while the other joints rest (speed below "
+                f"{options['rest_velocity']:g} rad/s); its largest steady speed alone is "
+                f"{np.abs(solo[:, j]).max():.3g} rad/s"
+            ) from None
+        maps.append(table.assign(joint=joint))
+        fits[joint] = {name: _fit_joint(joint, name, table) for name in names}
+    if not maps:
+        raise InputValueError(
+            "no constant-velocity plateau found: joints move, but none alone "
+            f"at a constant velocity (tolerance {options['tolerance']:g}) for longer than settle = "
+            f"{options['settle']:g} s while the others rest"
+        )
+    columns = ["joint", "velocity", "torque", "torque_std", "n_samples"]
+    return FrictionIdentification(
+        maps=pd.concat(maps, ignore_index=True)[columns],
+        fits=fits,
+        torque=torque,
+        settle=options["settle"],
+        tolerance=options["tolerance"],
+        rest_velocity=options["rest_velocity"],
+        max_acceleration=options["max_acceleration"],
+        window=options["window"],
+    )
+
+
+def _solo_velocities(log: Log, options: dict[str, float]) -> FloatArray:
+    """Velocity [rad/s] of each joint where it alone moves steadily, 0 elsewhere."""
+    dt = _uniform_period(log.t)
+    samples = max(5, 2 * round(options["window"] / dt / 2.0) + 1)
+    _, qd, qdd = SavitzkyGolay(dt, samples, polyorder=3).filter(log.q)
+    moving = np.abs(qd) > options["rest_velocity"]
+    if not moving.any():
+        raise InputValueError(
+            f"the robot stands still in this log: every joint speed stays below "
+            f"rest_velocity = {options['rest_velocity']:g} rad/s (largest "
+            f"{np.abs(qd).max():.3g} rad/s), so there is no constant-velocity plateau; "
+            "friction needs each joint moved alone at constant velocities (VelocitySweep)"
+        )
+    alone = moving & (moving.sum(axis=1, keepdims=True) == 1)
+    steady = alone & (np.abs(qdd) <= options["max_acceleration"])
+    return np.where(steady, qd, 0.0)
+
+
+def _fit_joint(joint: int, name: str, table: pd.DataFrame) -> FrictionFit:
+    try:
+        return _FITTERS[name](table["velocity"].to_numpy(), table["torque"].to_numpy())
+    except InputValueError as exc:
+        raise InputValueError(f"joint {joint}, model {name!r}: {exc}") from None

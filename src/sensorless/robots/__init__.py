@@ -2,7 +2,7 @@
 
 >>> import sensorless as sl
 >>> sl.robots.available()
-['panda', 'panda_gaz', 'planar2', 'puma560']
+['lwr4', 'panda', 'panda_gaz', 'planar2', 'puma560']
 >>> sl.robots.load("planar2").n_dof
 2
 """

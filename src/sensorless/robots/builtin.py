@@ -11,9 +11,10 @@ import numpy as np
 
 from ..exceptions import ModelError
 from ..friction import CoulombViscous, Sigmoid
+from .lwr4 import lwr4
 from .model import LinkInertia, MotorData, RobotModel
 
-__all__ = ["BUILTIN", "panda", "panda_gaz", "panda_urdf_path", "planar2", "puma560"]
+__all__ = ["BUILTIN", "lwr4", "panda", "panda_gaz", "panda_urdf_path", "planar2", "puma560"]
 
 _HALF_PI = np.pi / 2
 
@@ -223,6 +224,7 @@ def planar2(
 
 
 BUILTIN: dict[str, Callable[..., RobotModel]] = {
+    "lwr4": lwr4,
     "puma560": puma560,
     "panda": panda,
     "panda_gaz": panda_gaz,

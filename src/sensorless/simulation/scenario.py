@@ -28,15 +28,15 @@ import pandas as pd
 import yaml
 
 from .. import __version__
-from ..exceptions import ModelError, UnknownNameError
-from ..friction import CoulombViscous, LuGre
+from ..exceptions import InputValueError, ModelError, UnknownNameError
+from ..friction import Coulomb, CoulombViscous, LuGre
 from ..io import write_log
 from ..robots import load as load_robot
 from ..robots.model import RobotModel
-from ..trajectories import QuinticViaPoints, RandomPointToPoint, Trajectory
+from ..trajectories import QuinticViaPoints, RandomPointToPoint, Trajectory, VelocitySweep
 from .collisions import Contact, ContactSet, HalfSine, Push, Recorded
 from .controllers import ComputedTorque, JointPID
-from .model_error import perturb
+from .model_error import perturb, perturb_friction
 from .plants import FlexiblePlant, Friction, RigidPlant, TorqueFeedback
 from .sensors import SensorModel
 from .simulator import SimulationResult, simulate
@@ -140,6 +140,45 @@ class Scenario:
                 name=f"{nominal.name} (nominal)",
             )
         return true, nominal
+
+    def nominal(self, kind: str = "motor") -> RobotModel:
+        """The nominal model an observer of ``kind`` uses.
+
+        On a rigid plant it is the nominal robot for every kind. On a flexible
+        plant, the motor-torque observer sees the links plus the apparent motor
+        inertia (B_θ of the torque loop, else B) as armature and the friction of
+        the nominal robot; the torque-sensor observer (``kind="joint"``, eq. 4.9)
+        sees the links alone and the link-side friction of the plant, with the
+        scenario's friction error applied to it too.
+
+        Parameters
+        ----------
+        kind : {"motor", "joint", "acceleration"}
+            Observer kind (see :func:`sensorless.observers.observe`).
+        """
+        if kind not in ("motor", "joint", "acceleration"):
+            raise InputValueError(
+                f"observer kind must be motor, joint or acceleration; got {kind!r}"
+            )
+        true, nominal = self.robots()
+        plant = self.spec.get("plant", {"type": "rigid"})
+        if plant.get("type", "rigid") != "flexible":
+            return nominal
+        params = nominal.standard_parameters()
+        if kind == "joint":
+            params["Ia"] = 0.0
+            error = self.spec.get("model_error") or {}
+            friction = perturb_friction(
+                _friction(plant.get("link_friction", "robot"), true),
+                float(error.get("friction", error.get("inertial", 0.0))),
+                int(error.get("seed", 0)) + 1,
+            )
+            return nominal.with_standard_parameters(params, friction=friction)
+        feedback = plant.get("feedback")
+        inertia = plant.get("motor_inertia") if feedback is None else feedback["motor_inertia"]
+        if inertia is not None:
+            params["Ia"] = np.broadcast_to(np.asarray(inertia, dtype=float), (nominal.n_dof,))
+        return nominal.with_standard_parameters(params)
 
     def build(self, seed: int | None = None, collisions: bool = True) -> dict[str, Any]:
         """Everything :func:`simulate` needs, as keyword arguments."""
@@ -255,7 +294,9 @@ def _friction(spec: Any, robot: RobotModel) -> Friction:
             )
         options = {k: v for k, v in spec.items() if k != "type"}
         return lugre_from(base, **options)
-    raise ModelError(f"unknown friction type {kind!r}; options: robot, none, lugre")
+    if kind == "coulomb":
+        return Coulomb(spec["c_pos"], spec["c_neg"])
+    raise ModelError(f"unknown friction type {kind!r}; options: robot, none, lugre, coulomb")
 
 
 def _plant(spec: Mapping[str, Any], robot: RobotModel) -> RigidPlant | FlexiblePlant:
@@ -307,8 +348,14 @@ def _trajectory(
             segment_time=tuple(spec.get("segment_time", (1.0, 3.0))),
             rest=tuple(spec.get("rest", (0.0, 0.5))),
         )
+    if kind == "velocity_sweep":
+        # Friction experiment of §2.4.1; home [rad] defaults to q = 0, travel checked
+        # against the robot's joint limits.
+        sweep = {"home": [0.0] * robot.n_dof, **spec}
+        return VelocitySweep.from_dict(sweep, position_limits=robot.position_limits)
     raise ModelError(
-        f"unknown trajectory type {kind!r}; options: via_points, random_point_to_point"
+        f"unknown trajectory type {kind!r}; options: via_points, random_point_to_point, "
+        "velocity_sweep"
     )
 
 

@@ -30,10 +30,12 @@ from .base import (
 from .constant import ConstantThreshold
 from .model_based import ModelBasedThreshold
 from .time_variant import TimeVariantThreshold
-from .velocity import VelocityThreshold
+from .velocity import CombinedVelocityState, CombinedVelocityThreshold, VelocityThreshold
 
 __all__ = [
     "METHODS",
+    "CombinedVelocityState",
+    "CombinedVelocityThreshold",
     "ConstantThreshold",
     "ModelBasedThreshold",
     "Threshold",

@@ -1,0 +1,714 @@
+"""Optimised excitation trajectories for identification (Swevers et al. 1997).
+
+The trajectory of joint j is a finite Fourier series (thesis §2.4.3, "Using
+Optimal Trajectories"), the form of :class:`~sensorless.trajectories.FourierSeries`:
+
+    q_j(t) = q_{j,0} + Σ_{k=1}^{N} a_{j,k}/(ω_f k) sin(ω_f k t) − b_{j,k}/(ω_f k) cos(ω_f k t)
+
+with ω_f = 2π f. It is periodic with period 1/f, so the excitation can be
+repeated and averaged, and q̇, q̈ are analytic. The decision variables are the
+offsets q_{j,0} [rad] and the coefficients a_{j,k}, b_{j,k} [rad/s].
+
+Criterion: the condition number of the base regressor W = [Y_b(q(t_i),
+q̇(t_i), q̈(t_i))]_i stacked over ``n_samples`` instants of one period (its
+logarithm is minimised; the minimiser is the same). A small condition number
+keeps the least-squares estimate insensitive to noise in the torques. The
+condition number is that of W as it stands, in the SI units of the
+parameters, as in Swevers et al. and Gautier's work.
+
+Constraints: joint position, velocity and (optionally) acceleration limits at
+the same instants. All three are linear in the decision variables, so
+``scipy.optimize.minimize(method="SLSQP")`` gets them as linear inequalities
+with exact Jacobians; the gradient of the criterion is a forward difference
+whose perturbed trajectories go through the regressor in one batch.
+
+Limits between the instants: after the optimisation the trajectory is checked
+on a grid ``10`` times denser. Scaling every a, b by s scales q − q_0, q̇ and
+q̈ by exactly s, so where the dense grid finds an excess the coefficients are
+shrunk by the smallest such factor (reported as
+:attr:`ExcitationResult.amplitude_scale`): the returned trajectory respects
+the limits on the dense grid by construction.
+
+Optionally (``start_at_rest=True``) q̇(0) = Σ_k a_{j,k} = 0 and
+q̈(0) = Σ_k ω_f k b_{j,k} = 0, two linear equalities per joint, so that a robot
+at rest at q(0) can start the trajectory without a jump; without them the
+trajectory must be entered by a separate transition.
+
+References
+----------
+J. Swevers, C. Ganseman, D. B. Tükel, J. De Schutter, H. Van Brussel,
+"Optimal robot excitation and identification", IEEE Trans. Robotics and
+Automation 13(5), 1997.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import scipy.optimize
+import yaml
+from numpy.typing import ArrayLike
+
+from .. import __version__
+from .._validation import FloatArray
+from ..exceptions import DimensionError, InputTypeError, InputValueError
+from ..robots.base_parameters import BaseParameters, base_parameters
+from ..robots.model import RobotModel
+from ..trajectories import FourierSeries
+
+__all__ = ["ExcitationResult", "load_excitation", "optimize_excitation"]
+
+#: Points of the limit check per point of the optimisation grid.
+_CHECK_DENSITY = 10
+#: Step of the forward-difference gradient in the scaled decision variables.
+_GRADIENT_STEP = 1e-6
+#: Relative margin kept by the final amplitude scaling, against round-off.
+_SCALE_MARGIN = 1e-9
+#: The random starts use this fraction of the largest amplitude within the limits.
+_START_FILL = 0.8
+
+
+@dataclass(frozen=True)
+class ExcitationResult:
+    """An optimised excitation trajectory and how well it does.
+
+    Extremes are measured on the check grid (``10 × n_samples`` instants over
+    one period), after the final amplitude scaling.
+
+    Attributes
+    ----------
+    trajectory : FourierSeries
+        The optimised trajectory (one period).
+    initial_trajectory : FourierSeries
+        The best of the seeded random starts, before optimisation.
+    condition_number : float
+        cond(W) of :attr:`trajectory` on the optimisation grid [-].
+    initial_condition_number : float
+        cond(W) of :attr:`initial_trajectory` on the same grid [-].
+    robot : str
+        Name of the robot model.
+    joint_names : list of str
+    base_names : list of str
+        The base parameters whose regressor W is made of.
+    n_samples : int
+        Instants of the optimisation grid over one period.
+    lower_limit, upper_limit : ndarray of shape (n_dof,)
+        Position limits used [rad].
+    velocity_limit : ndarray of shape (n_dof,)
+        Velocity limits used [rad/s].
+    acceleration_limit : ndarray of shape (n_dof,)
+        Acceleration limits used [rad/s²]; inf where unconstrained.
+    min_position, max_position : ndarray of shape (n_dof,)
+        Extreme joint positions of :attr:`trajectory` [rad].
+    max_velocity : ndarray of shape (n_dof,)
+        Largest |q̇| [rad/s].
+    max_acceleration : ndarray of shape (n_dof,)
+        Largest |q̈| [rad/s²].
+    amplitude_scale : float
+        Factor (<= 1) applied to the optimised a, b so that the check grid
+        respects the limits; 1 when nothing had to be shrunk.
+    success : bool
+        Whether SLSQP reported convergence for the kept run.
+    message : str
+        SLSQP's message for the kept run.
+    n_iterations : int
+        SLSQP iterations of the kept run.
+    """
+
+    trajectory: FourierSeries
+    initial_trajectory: FourierSeries
+    condition_number: float
+    initial_condition_number: float
+    robot: str
+    joint_names: list[str]
+    base_names: list[str]
+    n_samples: int
+    lower_limit: FloatArray
+    upper_limit: FloatArray
+    velocity_limit: FloatArray
+    acceleration_limit: FloatArray
+    min_position: FloatArray
+    max_position: FloatArray
+    max_velocity: FloatArray
+    max_acceleration: FloatArray
+    amplitude_scale: float
+    success: bool
+    message: str
+    n_iterations: int
+
+    @property
+    def within_limits(self) -> bool:
+        """True when every extreme lies within its limit (checked on the check grid)."""
+        return bool(
+            (self.min_position >= self.lower_limit).all()
+            and (self.max_position <= self.upper_limit).all()
+            and (self.max_velocity <= self.velocity_limit).all()
+            and (self.max_acceleration <= self.acceleration_limit).all()
+        )
+
+    def to_pandas(self) -> pd.DataFrame:
+        """One row per joint: offset, extremes and limits (SI units, radians)."""
+        return pd.DataFrame(
+            {
+                "offset": self.trajectory.q0,
+                "min_position": self.min_position,
+                "max_position": self.max_position,
+                "lower_limit": self.lower_limit,
+                "upper_limit": self.upper_limit,
+                "max_velocity": self.max_velocity,
+                "velocity_limit": self.velocity_limit,
+                "max_acceleration": self.max_acceleration,
+                "acceleration_limit": self.acceleration_limit,
+            },
+            index=pd.Index(self.joint_names, name="joint"),
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain Python values: the trajectory specification and the figures of merit."""
+
+        def as_list(arr: FloatArray) -> list[float]:
+            return [float(v) for v in arr]
+
+        return {
+            "robot": self.robot,
+            "trajectory": self.trajectory.to_dict(),
+            "condition_number": float(self.condition_number),
+            "initial_condition_number": float(self.initial_condition_number),
+            "n_samples": int(self.n_samples),
+            "amplitude_scale": float(self.amplitude_scale),
+            "success": bool(self.success),
+            "message": str(self.message),
+            "n_iterations": int(self.n_iterations),
+            "base_parameters": list(self.base_names),
+            "joints": {
+                "names": list(self.joint_names),
+                "min_position": as_list(self.min_position),
+                "max_position": as_list(self.max_position),
+                "lower_limit": as_list(self.lower_limit),
+                "upper_limit": as_list(self.upper_limit),
+                "max_velocity": as_list(self.max_velocity),
+                "velocity_limit": as_list(self.velocity_limit),
+                "max_acceleration": as_list(self.max_acceleration),
+                "acceleration_limit": as_list(self.acceleration_limit),
+            },
+        }
+
+    def to_yaml(self, path: str | Path) -> Path:
+        """Write :meth:`to_dict` to a YAML file a person can read; return its path.
+
+        The ``trajectory`` entry is a ``{type: fourier, ...}`` specification
+        that :func:`load_excitation` (or :meth:`FourierSeries.from_dict`) reads
+        back into the identical series.
+        """
+        header = (
+            f"# Excitation trajectory (finite Fourier series, Swevers et al. 1997) written by "
+            f"sensorless {__version__}.\n"
+            "# SI units: base_frequency [Hz], duration [s], offset and positions [rad], "
+            "a, b and velocities [rad/s],\n# accelerations [rad/s^2]. "
+            "q_j(t) = offset_j + sum_k a[k-1][j]/(w k) sin(w k t) - b[k-1][j]/(w k) cos(w k t), "
+            "w = 2 pi base_frequency.\n"
+        )
+        text = yaml.safe_dump(self.to_dict(), sort_keys=False, default_flow_style=None, width=100)
+        out = Path(path)
+        out.write_text(header + text, encoding="utf-8")
+        return out
+
+
+def load_excitation(path: str | Path) -> FourierSeries:
+    """Read the trajectory of a file written by :meth:`ExcitationResult.to_yaml`.
+
+    A file that holds a bare ``{type: fourier, ...}`` specification is read too.
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file.
+    InputValueError
+        Not YAML, or no Fourier specification in it.
+    """
+    text = Path(path).read_text(encoding="utf-8")
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise InputValueError(f"{path} is not a YAML file: {exc}") from None
+    if isinstance(data, dict) and "trajectory" in data:
+        data = data["trajectory"]
+    if not isinstance(data, dict):
+        raise InputValueError(
+            f"{path} holds no trajectory specification: expected a mapping with a "
+            f"'trajectory' entry or the keys of FourierSeries.to_dict; got {type(data).__name__}"
+        )
+    return FourierSeries.from_dict(data)
+
+
+# ---------------------------------------------------------------------- checks
+
+
+def _integer(value: Any, name: str, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise InputValueError(f"{name} must be an integer >= {minimum}; got {value!r}")
+    return int(value)
+
+
+def _per_joint(value: ArrayLike, n_dof: int, name: str, unit: str) -> FloatArray:
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise DimensionError(
+            f"{name} must be a number or an array of shape ({n_dof},) [{unit}]; got {value!r}"
+        ) from None
+    if arr.ndim == 0:
+        arr = np.full(n_dof, float(arr))
+    if arr.shape != (n_dof,):
+        raise DimensionError(
+            f"{name} must be a number or have shape ({n_dof},) [{unit}] for {n_dof} joints; "
+            f"got shape {arr.shape}"
+        )
+    if np.isnan(arr).any():
+        raise InputValueError(f"{name} must not contain NaN; got {arr}")
+    return arr
+
+
+def _positive_limits(value: ArrayLike, n_dof: int, name: str, unit: str) -> FloatArray:
+    arr = _per_joint(value, n_dof, name, unit)
+    if (arr <= 0).any():
+        j = int(np.argmax(arr <= 0))
+        raise InputValueError(f"{name} must be positive [{unit}]; joint {j} has {arr[j]:.6g}")
+    return arr
+
+
+def _limits(
+    robot: RobotModel,
+    position_limits: tuple[ArrayLike, ArrayLike] | None,
+    velocity_limits: ArrayLike | None,
+    acceleration_limits: ArrayLike | None,
+    margin: float,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    n = robot.n_dof
+    if not (np.isfinite(margin) and 0.0 <= margin < 0.5):
+        raise InputValueError(f"limit_margin must lie in [0, 0.5); got {margin!r}")
+    if position_limits is None:
+        low, high = robot.position_limits
+        source = f"the position limits of robot {robot.name!r}"
+        if np.isfinite(low).all() and np.isfinite(high).all():
+            span = high - low
+            low, high = low + margin * span, high - margin * span
+    else:
+        if len(position_limits) != 2:
+            raise DimensionError(
+                f"position_limits must be a pair (lower, upper) [rad]; got {position_limits!r}"
+            )
+        low = _per_joint(position_limits[0], n, "position_limits lower", "rad")
+        high = _per_joint(position_limits[1], n, "position_limits upper", "rad")
+        source = "position_limits"
+    if not (np.isfinite(low).all() and np.isfinite(high).all()):
+        raise InputValueError(
+            f"{source} must be finite; got lower {low}, upper {high}. Pass position_limits"
+        )
+    if (low >= high).any():
+        j = int(np.argmax(low >= high))
+        raise InputValueError(
+            f"{source} need lower < upper; joint {j} has {low[j]:.6g} >= {high[j]:.6g} rad"
+        )
+    if velocity_limits is None:
+        velocity = robot.velocity_limits * (1.0 - 2.0 * margin)
+        if not np.isfinite(velocity).all():
+            raise InputValueError(
+                f"robot {robot.name!r} has no finite velocity limits ({robot.velocity_limits}); "
+                "pass velocity_limits [rad/s]"
+            )
+    else:
+        velocity = _positive_limits(velocity_limits, n, "velocity_limits", "rad/s")
+        if not np.isfinite(velocity).all():
+            raise InputValueError(f"velocity_limits must be finite [rad/s]; got {velocity}")
+    if acceleration_limits is None:
+        acceleration = np.full(n, np.inf)
+    else:
+        acceleration = _positive_limits(acceleration_limits, n, "acceleration_limits", "rad/s²")
+    return low, high, velocity, acceleration
+
+
+# ---------------------------------------------------------------------- problem
+
+
+class _Problem:
+    """The Fourier parametrisation on a time grid, in scaled decision variables.
+
+    x = [q_0 / h, vec(a) / v, vec(b) / v] with h the half range of the position
+    limits and v the velocity limits, so that every variable is of order 1;
+    vec stacks harmonic-major (index k·n_dof + j). q, q̇, q̈ flattened
+    sample-major are J x for constant matrices J: the map is linear.
+    """
+
+    def __init__(
+        self,
+        base: BaseParameters,
+        n_harmonics: int,
+        base_frequency: float,
+        n_samples: int,
+        limits: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+    ) -> None:
+        self.base = base
+        self.n_dof = base.robot.n_dof
+        self.n_harmonics = n_harmonics
+        self.base_frequency = base_frequency
+        self.lower, self.upper, self.velocity, self.acceleration = limits
+        self.half_range = 0.5 * (self.upper - self.lower)
+        self.omega = 2.0 * np.pi * base_frequency * np.arange(1, n_harmonics + 1)
+        t = np.arange(n_samples) / (n_samples * base_frequency)
+        self.jq, self.jqd, self.jqdd = self.jacobians(t)
+
+    def jacobians(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """J_q, J_q̇, J_q̈ of shape (len(t)·n_dof, n_dof (1 + 2 n_harmonics))."""
+        n, m = self.n_dof, t.size
+        phase = np.outer(t, self.omega)
+        sin, cos = np.sin(phase), np.cos(phase)
+        v = np.diag(self.velocity)
+        zero = np.zeros((m * n, n))
+        jq = np.hstack(
+            [
+                np.kron(np.ones((m, 1)), np.diag(self.half_range)),
+                np.kron(sin / self.omega, v),
+                np.kron(-cos / self.omega, v),
+            ]
+        )
+        jqd = np.hstack([zero, np.kron(cos, v), np.kron(sin, v)])
+        jqdd = np.hstack([zero, np.kron(-sin * self.omega, v), np.kron(cos * self.omega, v)])
+        return jq, jqd, jqdd
+
+    def pack(self, q0: FloatArray, a: FloatArray, b: FloatArray) -> FloatArray:
+        return np.concatenate(
+            [q0 / self.half_range, (a / self.velocity).ravel(), (b / self.velocity).ravel()]
+        )
+
+    def unpack(self, x: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        n, k = self.n_dof, self.n_harmonics
+        q0 = x[:n] * self.half_range
+        a = x[n : n + n * k].reshape(k, n) * self.velocity
+        b = x[n + n * k :].reshape(k, n) * self.velocity
+        return q0, a, b
+
+    def series(self, x: FloatArray) -> FourierSeries:
+        q0, a, b = self.unpack(x)
+        return FourierSeries(self.base_frequency, a=a, b=b, q0=q0)
+
+    def regressors(self, xs: FloatArray) -> FloatArray:
+        """W for each column of ``xs`` (n_variables, n_points): (n_points, m·n_dof, count)."""
+        n, n_points = self.n_dof, xs.shape[1]
+
+        def states(j: FloatArray) -> FloatArray:
+            # (m·n, n_points) -> (n_points·m, n): one trajectory after the other.
+            return (j @ xs).T.reshape(-1, n)
+
+        y = self.base.regressor(states(self.jq), states(self.jqd), states(self.jqdd))
+        return np.asarray(y.reshape(n_points, -1, self.base.count))
+
+    def log_condition(self, xs: FloatArray) -> FloatArray:
+        """log cond(W) for each column of ``xs`` (shape (n_variables, n_points)).
+
+        From the eigenvalues of WᵀW, which is small (count × count): far cheaper
+        than batched SVDs of the tall W and accurate enough for the search
+        (cond² stays well within double precision for any useful trajectory).
+        """
+        w = self.regressors(xs)
+        eigenvalues = np.linalg.eigvalsh(np.swapaxes(w, 1, 2) @ w)
+        smallest = np.maximum(eigenvalues[:, 0], np.finfo(float).tiny)
+        return np.asarray(0.5 * (np.log(eigenvalues[:, -1]) - np.log(smallest)))
+
+    def condition_number(self, x: FloatArray) -> float:
+        """cond(W) of one trajectory, from the singular values of W."""
+        singular = np.linalg.svd(self.regressors(x[:, None])[0], compute_uv=False)
+        return float(singular[0] / singular[-1]) if singular[-1] > 0 else float("inf")
+
+    def constraints(self, start_at_rest: bool) -> list[dict[str, Any]]:
+        """Linear constraints of SLSQP: A x - c >= 0 (limits) and E x = 0 (rest at t = 0)."""
+        blocks = [
+            (self.jq, -np.tile(self.lower, self.jq.shape[0] // self.n_dof)),
+            (-self.jq, np.tile(self.upper, self.jq.shape[0] // self.n_dof)),
+        ]
+        for jac, limit in ((self.jqd, self.velocity), (self.jqdd, self.acceleration)):
+            finite = np.isfinite(np.tile(limit, jac.shape[0] // self.n_dof))
+            bound = np.tile(limit, jac.shape[0] // self.n_dof)[finite]
+            blocks += [(jac[finite], bound), (-jac[finite], bound)]
+        matrix = np.vstack([block[0] for block in blocks])
+        offset = np.concatenate([block[1] for block in blocks])
+        out: list[dict[str, Any]] = [
+            {
+                "type": "ineq",
+                "fun": lambda x: matrix @ x + offset,
+                "jac": lambda x: matrix,
+            }
+        ]
+        if start_at_rest:
+            # Row block 0 of J_q̇ and J_q̈ is t = 0: q̇(0) = Σ a, q̈(0) = Σ ω_k b.
+            rest = np.vstack([self.jqd[: self.n_dof], self.jqdd[: self.n_dof]])
+            out.append({"type": "eq", "fun": lambda x: rest @ x, "jac": lambda x: rest})
+        return out
+
+
+class _Objective:
+    """log cond(W) and its forward-difference gradient, sharing evaluations."""
+
+    def __init__(self, problem: _Problem) -> None:
+        self.problem = problem
+        self.last_x: FloatArray | None = None
+        self.last_value = 0.0
+
+    def value(self, x: FloatArray) -> float:
+        if self.last_x is None or not np.array_equal(x, self.last_x):
+            self.last_value = float(self.problem.log_condition(x[:, None])[0])
+            self.last_x = x.copy()
+        return self.last_value
+
+    def gradient(self, x: FloatArray) -> FloatArray:
+        points = np.hstack([x[:, None], x[:, None] + _GRADIENT_STEP * np.eye(x.size)])
+        values = self.problem.log_condition(points)
+        self.last_x, self.last_value = x.copy(), float(values[0])
+        return np.asarray((values[1:] - values[0]) / _GRADIENT_STEP)
+
+
+def _amplitude_scale(
+    q0: FloatArray,
+    q: FloatArray,
+    qd: FloatArray,
+    qdd: FloatArray,
+    limits: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+) -> float:
+    """Largest s >= 0 with q0 + s (q - q0), s q̇, s q̈ within the limits at every sample."""
+    lower, upper, velocity, acceleration = limits
+    swing = q - q0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        room = np.where(
+            swing > 0, (upper - q0) / swing, np.where(swing < 0, (lower - q0) / swing, np.inf)
+        )
+        ratios = [
+            room.min(),
+            (velocity / np.abs(qd)).min(),
+            (acceleration / np.abs(qdd)).min(),
+        ]
+    return max(float(np.nanmin(ratios)), 0.0)
+
+
+def _random_start(problem: _Problem, rng: np.random.Generator, start_at_rest: bool) -> FloatArray:
+    n, k = problem.n_dof, problem.n_harmonics
+    centre = 0.5 * (problem.lower + problem.upper)
+    q0 = centre + 0.5 * problem.half_range * rng.uniform(-1.0, 1.0, n)
+    # Coefficients falling off as 1/k: a smooth start, like a band-limited excitation.
+    decay = 1.0 / np.arange(1, k + 1)[:, None]
+    a = rng.standard_normal((k, n)) * decay
+    b = rng.standard_normal((k, n)) * decay
+    if start_at_rest:
+        a -= a.mean(axis=0)
+        weights = problem.omega[:, None]
+        b -= weights * (weights * b).sum(axis=0) / (weights**2).sum()
+    x = problem.pack(q0, a, b)
+    q, qd, qdd = ((j @ x).reshape(-1, n) for j in (problem.jq, problem.jqd, problem.jqdd))
+    limits = (problem.lower, problem.upper, problem.velocity, problem.acceleration)
+    scale = _START_FILL * _amplitude_scale(q0, q, qd, qdd, limits)
+    return problem.pack(q0, scale * a, scale * b)
+
+
+def _fit_to_limits(
+    problem: _Problem, x: FloatArray, n_check: int
+) -> tuple[FourierSeries, float, tuple[FloatArray, ...]]:
+    """Shrink the amplitudes of ``x`` until a dense grid respects the limits."""
+    trajectory = problem.series(x)
+    t = np.arange(n_check) / (n_check * problem.base_frequency)
+    q, qd, qdd = trajectory.evaluate(t)
+    limits = (problem.lower, problem.upper, problem.velocity, problem.acceleration)
+    scale = min(1.0, _amplitude_scale(trajectory.q0, q, qd, qdd, limits))
+    if scale < 1.0:
+        # A hair inside, so that the round-off of s·q̇ cannot cross the limit.
+        scale *= 1.0 - _SCALE_MARGIN
+        trajectory = FourierSeries(
+            problem.base_frequency, a=scale * trajectory.a, b=scale * trajectory.b, q0=trajectory.q0
+        )
+        q, qd, qdd = trajectory.evaluate(t)
+    extremes = (
+        q.min(axis=0),
+        q.max(axis=0),
+        np.abs(qd).max(axis=0),
+        np.abs(qdd).max(axis=0),
+    )
+    return trajectory, scale, extremes
+
+
+def optimize_excitation(
+    robot: RobotModel,
+    *,
+    base: BaseParameters | None = None,
+    zero: Sequence[str] = (),
+    n_harmonics: int = 5,
+    base_frequency: float = 0.1,
+    n_samples: int | None = None,
+    position_limits: tuple[ArrayLike, ArrayLike] | None = None,
+    velocity_limits: ArrayLike | None = None,
+    acceleration_limits: ArrayLike | None = None,
+    limit_margin: float = 0.1,
+    start_at_rest: bool = False,
+    seed: int = 0,
+    n_restarts: int = 3,
+    max_iterations: int = 100,
+) -> ExcitationResult:
+    """Fourier excitation trajectory minimising cond(W) within joint limits.
+
+    Parameters
+    ----------
+    robot : RobotModel
+        Robot to excite; its limits are the defaults.
+    base : BaseParameters, optional
+        Base parameters whose regressor W is conditioned; by default
+        ``base_parameters(robot, zero=zero)``.
+    zero : sequence of str
+        Standard parameters known to be zero; only without ``base``.
+    n_harmonics : int
+        Harmonics N per joint.
+    base_frequency : float
+        Fundamental frequency f [Hz]; the period 1/f [s] is the duration.
+    n_samples : int, optional
+        Instants of one period at which W is stacked and the limits imposed;
+        default ``max(20 N, 2 count / n_dof + 1)``. At least 2N + 1, and
+        ``n_samples · n_dof`` must exceed the number of base parameters.
+    position_limits : (lower, upper), optional
+        Joint position limits [rad], numbers or arrays of shape (n_dof,);
+        default the robot's, shrunk by ``limit_margin`` of their span at each
+        end.
+    velocity_limits : float or array-like of shape (n_dof,), optional
+        Joint speed limits [rad/s]; default the robot's times ``1 − 2 limit_margin``.
+    acceleration_limits : float or array-like of shape (n_dof,), optional
+        Joint acceleration limits [rad/s²]; default none (robot models carry none).
+    limit_margin : float
+        Fraction of the span of the robot's limits kept free at each end,
+        0 <= limit_margin < 0.5; only for limits taken from the robot.
+    start_at_rest : bool
+        Impose q̇(0) = 0 and q̈(0) = 0 (needs ``n_harmonics >= 2``).
+    seed : int
+        Seed of the random starts (:func:`numpy.random.default_rng`); the same
+        seed and arguments give identical coefficients on the same machine and
+        BLAS threading (another thread count rounds sums differently, and the
+        optimiser amplifies that into a slightly different optimum).
+    n_restarts : int
+        Random starts; the run with the lowest final cond(W) is kept.
+    max_iterations : int
+        SLSQP iterations per start.
+
+    Returns
+    -------
+    ExcitationResult
+
+    Raises
+    ------
+    InputTypeError
+        If ``robot`` is not a RobotModel or ``base`` not a BaseParameters.
+    DimensionError
+        If a limit has the wrong shape or ``base`` belongs to a robot with
+        another number of joints.
+    InputValueError
+        For a bad count, frequency, margin, seed, a non-positive or missing
+        limit, or ``zero`` given together with ``base``.
+
+    Examples
+    --------
+    >>> import sensorless as sl
+    >>> robot = sl.robots.load("planar2")
+    >>> res = optimize_excitation(robot, n_harmonics=2, position_limits=(-2.0, 2.0),
+    ...                           velocity_limits=1.5, n_restarts=1, max_iterations=20)
+    >>> bool(res.condition_number < res.initial_condition_number) and res.within_limits
+    True
+    """
+    if not isinstance(robot, RobotModel):
+        raise InputTypeError(f"robot must be a RobotModel; got {type(robot).__name__}")
+    if base is None:
+        base = base_parameters(robot, zero=zero)
+    elif not isinstance(base, BaseParameters):
+        raise InputTypeError(f"base must be a BaseParameters; got {type(base).__name__}")
+    elif tuple(zero):
+        raise InputValueError(
+            f"zero={tuple(zero)!r} applies only without base; the given base already fixes "
+            f"the zero parameters {base.zero!r}"
+        )
+    elif base.robot.n_dof != robot.n_dof:
+        raise DimensionError(
+            f"base belongs to a robot with {base.robot.n_dof} joints; robot "
+            f"{robot.name!r} has {robot.n_dof}"
+        )
+    n_harmonics = _integer(n_harmonics, "n_harmonics", 1)
+    if start_at_rest and n_harmonics < 2:
+        raise InputValueError(
+            "start_at_rest needs n_harmonics >= 2: with one harmonic q̇(0) = q̈(0) = 0 "
+            f"leaves no motion; got n_harmonics={n_harmonics}"
+        )
+    try:
+        frequency = float(base_frequency)
+    except (TypeError, ValueError):
+        frequency = float("nan")
+    if not (np.isfinite(frequency) and frequency > 0):
+        raise InputValueError(
+            f"base_frequency must be a positive number [Hz]; got {base_frequency!r}"
+        )
+    n = robot.n_dof
+    if n_samples is None:
+        n_samples = max(20 * n_harmonics, 2 * base.count // n + 1)
+    n_samples = _integer(n_samples, "n_samples", 2 * n_harmonics + 1)
+    if n_samples * n <= base.count:
+        raise InputValueError(
+            f"n_samples · n_dof must exceed the {base.count} base parameters; got "
+            f"{n_samples} · {n} = {n_samples * n}"
+        )
+    seed = _integer(seed, "seed", 0)
+    n_restarts = _integer(n_restarts, "n_restarts", 1)
+    max_iterations = _integer(max_iterations, "max_iterations", 1)
+    limits = _limits(robot, position_limits, velocity_limits, acceleration_limits, limit_margin)
+
+    problem = _Problem(base, n_harmonics, frequency, n_samples, limits)
+    constraints = problem.constraints(bool(start_at_rest))
+    rng = np.random.default_rng(seed)
+    starts, runs = [], []
+    for _ in range(n_restarts):
+        x0 = _random_start(problem, rng, bool(start_at_rest))
+        starts.append((problem.condition_number(x0), x0))
+        objective = _Objective(problem)
+        run = scipy.optimize.minimize(
+            objective.value,
+            x0,
+            jac=objective.gradient,
+            method="SLSQP",
+            constraints=constraints,
+            options={"maxiter": max_iterations},
+        )
+        trajectory, scale, extremes = _fit_to_limits(problem, run.x, _CHECK_DENSITY * n_samples)
+        condition = problem.condition_number(
+            problem.pack(trajectory.q0, trajectory.a, trajectory.b)
+        )
+        runs.append((condition, trajectory, scale, extremes, run))
+    initial_condition, initial_x = min(starts, key=lambda item: item[0])
+    condition, trajectory, scale, extremes, run = min(runs, key=lambda item: item[0])
+    low, high, velocity, acceleration = limits
+    min_q, max_q, max_qd, max_qdd = extremes
+    return ExcitationResult(
+        trajectory=trajectory,
+        initial_trajectory=problem.series(initial_x),
+        condition_number=condition,
+        initial_condition_number=initial_condition,
+        robot=robot.name,
+        joint_names=list(robot.joint_names),
+        base_names=list(base.names),
+        n_samples=n_samples,
+        lower_limit=low,
+        upper_limit=high,
+        velocity_limit=velocity,
+        acceleration_limit=acceleration,
+        min_position=min_q,
+        max_position=max_q,
+        max_velocity=max_qd,
+        max_acceleration=max_qdd,
+        amplitude_scale=scale,
+        success=bool(run.success),
+        message=str(run.message),
+        n_iterations=int(run.nit),
+    )

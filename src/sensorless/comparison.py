@@ -180,7 +180,7 @@ def compare(
     for method in methods:
         watched = METHOD_NAMES[method]
         for kind in residuals if watched == "motor" else (watched,):
-            plan.append((method if kind == "motor" else f"{method} ({kind})", method, kind))
+            plan.append((f"{method} (joint)" if kind == "joint" else method, method, kind))
     # One observer pass per residual kind, shared by every method that watches it.
     kinds = {kind for _, _, kind in plan} | set(residuals)
     nominal = {kind: scenario.nominal(kind) for kind in kinds}

@@ -200,6 +200,16 @@ def compare(
     evaluations: dict[str, Evaluation] = {}
     bounds: dict[str, tuple[FloatArray, FloatArray]] = {}
     events: dict[str, list[Event]] = {}
+    kind_of: dict[str, str] = {}
+
+    def detect(label: str, threshold: Threshold, kind: str) -> None:
+        # One pass gives both bounds and events (the model-based bound is costly).
+        detection = Detector(threshold, min_duration=min_duration, hold=hold).run(signals[kind])
+        bounds[label] = (detection.lower, detection.upper)
+        events[label] = detection.events
+        evaluations[label] = evaluate(events[label], test, method=label)
+        kind_of[label] = kind
+
     for label, method, kind in plan:
         say(f"{scenario.name}: tuning and detecting with {label}")
         options: dict[str, Any] = {"joints": joint_tuple, "margin": margins[kind]}
@@ -210,13 +220,8 @@ def compare(
             # Its bound needs the split regressor at every sample (l Pinocchio
             # regressor calls each): the costliest fit by far.
             fit_runs = fit_runs[:model_tuning_runs]
-        threshold = make_threshold(method, nominal[kind], **options).fit(fit_runs)
-        # One pass gives both bounds and events (the model-based bound is costly).
-        detection = Detector(threshold, min_duration=min_duration, hold=hold).run(signals[kind])
-        thresholds[label] = threshold
-        bounds[label] = (detection.lower, detection.upper)
-        events[label] = detection.events
-        evaluations[label] = evaluate(events[label], test, method=label)
+        thresholds[label] = make_threshold(method, nominal[kind], **options).fit(fit_runs)
+        detect(label, thresholds[label], kind)
     if "velocity" in methods and {"motor", "joint"} <= set(residuals):
         # Both residuals of the same runs: one fit with a shared γ (eq. 4.21, 4.47).
         say(f"{scenario.name}: tuning and detecting with velocity-combined")
@@ -229,12 +234,8 @@ def compare(
             # Fitted without margin: each residual gets the margin of its own β.
             single.lower_ = single.lower_ - margins[kind]
             single.upper_ = single.upper_ + margins[kind]
-            detection = Detector(single, min_duration=min_duration, hold=hold).run(signals[kind])
             thresholds[label] = combined
-            bounds[label] = (detection.lower, detection.upper)
-            events[label] = detection.events
-            evaluations[label] = evaluate(events[label], test, method=label)
-            plan.append((label, "velocity", kind))
+            detect(label, single, kind)
     return Comparison(
         scenario.name,
         joint_tuple,
@@ -245,7 +246,7 @@ def compare(
         events,
         test,
         {"tuning": seeds[:-1], "test": seeds[-1], "master": master_seed},
-        {label: kind for label, _, kind in plan},
+        kind_of,
     )
 
 

@@ -385,7 +385,39 @@ class _FrictionFunction:
 
 
 # ---------------------------------------------------------------- momentum observer
-class MomentumObserver:
+class _NominalObserver:
+    """What both observers share: the nominal model, its friction and the torque kind."""
+
+    def __init__(self, robot: RobotModel, friction: Any, torque: str) -> None:
+        self._robot = _check_robot(robot)
+        self._torque = _check_torque_kind(torque)
+        self._friction_model = _resolve_friction(friction, robot)
+        self._friction = _FrictionFunction(self._friction_model)
+        self._pin_model = robot.pinocchio_model
+        self._pin_data = robot.pinocchio_model.createData()
+
+    @property
+    def robot(self) -> RobotModel:
+        """Nominal model."""
+        return self._robot
+
+    @property
+    def torque(self) -> str:
+        """``"motor"`` (τ_m, eq. 4.4) or ``"joint"`` (τ_J, eq. 4.9): which torque τ is used."""
+        return self._torque
+
+    @property
+    def friction_model(self) -> FrictionModel | None:
+        """Nominal friction τ̂_fr actually used (a LuGre model appears as its Stribeck curve)."""
+        return self._friction_model
+
+    @property
+    def n_dof(self) -> int:
+        """Number of joints."""
+        return self.robot.n_dof
+
+
+class MomentumObserver(_NominalObserver):
     """Generalized-momentum residual r̂ (eq. 4.4) or r̂_s (eq. 4.9), discretised exactly.
 
     With p = M(q) q̇ (eq. 4.2) and w = Cᵀ(q, q̇) q̇ − g(q) − τ̂_fr(q̇),
@@ -467,21 +499,11 @@ class MomentumObserver:
         friction: Any = "model",
         torque: str = "motor",
     ) -> None:
-        self._robot = _check_robot(robot)
+        super().__init__(robot, friction, torque)
         self._dt = check_dt(dt)
         self._gain = _check_gain(gain, robot.n_dof)
-        self._torque = _check_torque_kind(torque)
-        self._friction_model = _resolve_friction(friction, robot)
-        self._friction = _FrictionFunction(self._friction_model)
         self._pole, self._weight = _coefficients(self._gain, self._dt)
-        self._pin_model = robot.pinocchio_model
-        self._pin_data = robot.pinocchio_model.createData()
         self._zero = np.zeros(robot.n_dof)
-
-    @property
-    def robot(self) -> RobotModel:
-        """Nominal model."""
-        return self._robot
 
     @property
     def dt(self) -> float:
@@ -492,21 +514,6 @@ class MomentumObserver:
     def gain(self) -> FloatArray:
         """Observer gain K_I per joint [1/s] (read-only array)."""
         return self._gain
-
-    @property
-    def torque(self) -> str:
-        """``"motor"`` (r̂, eq. 4.4) or ``"joint"`` (r̂_s, eq. 4.9)."""
-        return self._torque
-
-    @property
-    def friction_model(self) -> FrictionModel | None:
-        """Nominal friction τ̂_fr actually used (a LuGre model appears as its Stribeck curve)."""
-        return self._friction_model
-
-    @property
-    def n_dof(self) -> int:
-        """Number of joints."""
-        return self.robot.n_dof
 
     def __repr__(self) -> str:
         return (
@@ -745,7 +752,7 @@ class MomentumObserver:
 
 
 # ---------------------------------------------------------------- acceleration observer
-class AccelerationObserver:
+class AccelerationObserver(_NominalObserver):
     """Acceleration-based estimate τ̂_c of eq. (3.8)/(3.16) with a causal filter F.
 
         τ̂_c = M(q) q̂̈ + C(q, q̂̇) q̂̇ + g(q) − τ + τ̂_fr(q̂̇)
@@ -792,43 +799,18 @@ class AccelerationObserver:
         friction: Any = "model",
         torque: str = "motor",
     ) -> None:
-        self._robot = _check_robot(robot)
+        super().__init__(robot, friction, torque)
         if not isinstance(estimator, CausalEstimator):
             raise InputTypeError(
                 "estimator must be a causal estimator of sensorless.filters (FiniteDifference, "
                 f"DirtyDerivative, Butterworth); got {type(estimator).__name__}"
             )
         self._estimator = estimator
-        self._torque = _check_torque_kind(torque)
-        self._friction_model = _resolve_friction(friction, robot)
-        self._friction = _FrictionFunction(self._friction_model)
-        self._pin_model = robot.pinocchio_model
-        self._pin_data = robot.pinocchio_model.createData()
-
-    @property
-    def robot(self) -> RobotModel:
-        """Nominal model."""
-        return self._robot
 
     @property
     def estimator(self) -> CausalEstimator:
         """Velocity and acceleration estimator."""
         return self._estimator
-
-    @property
-    def torque(self) -> str:
-        """``"motor"`` or ``"joint"``: which torque τ is subtracted."""
-        return self._torque
-
-    @property
-    def friction_model(self) -> FrictionModel | None:
-        """Nominal friction τ̂_fr actually used (a LuGre model appears as its Stribeck curve)."""
-        return self._friction_model
-
-    @property
-    def n_dof(self) -> int:
-        """Number of joints."""
-        return self.robot.n_dof
 
     @property
     def dt(self) -> float:

@@ -32,10 +32,10 @@ from scipy.optimize import least_squares, lsq_linear
 
 from .._validation import FloatArray
 from ..exceptions import DimensionError, InputTypeError, InputValueError
-from ..filters import SavitzkyGolay
 from ..friction import Coulomb, CoulombViscous, FrictionModel, LuGre, Stribeck
 from ..io import Log
 from ..robots.model import RobotModel
+from .logs import savgol_derivatives
 
 __all__ = [
     "FrictionFit",
@@ -966,8 +966,7 @@ def identify_friction(
 def _solo_velocities(log: Log, options: dict[str, float]) -> FloatArray:
     """Velocity [rad/s] of each joint where it alone moves steadily, 0 elsewhere."""
     dt = _uniform_period(log.t)
-    samples = max(5, 2 * round(options["window"] / dt / 2.0) + 1)
-    _, qd, qdd = SavitzkyGolay(dt, samples, polyorder=3).filter(log.q)
+    qd, qdd = savgol_derivatives(log.q, dt, options["window"])
     moving = np.abs(qd) > options["rest_velocity"]
     if not moving.any():
         raise InputValueError(

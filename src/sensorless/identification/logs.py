@@ -13,6 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from .._validation import FloatArray
 from ..exceptions import DimensionError, InputValueError
 from ..filters import SavitzkyGolay
 from ..io import Log
@@ -20,7 +21,22 @@ from ..robots.base_parameters import BaseParameters
 from ..robots.model import RobotModel
 from .regression import RegressionResult, identify_base_parameters
 
-__all__ = ["identify_from_logs"]
+__all__ = ["identify_from_logs", "savgol_derivatives"]
+
+
+def savgol_derivatives(q: FloatArray, dt: float, window: float) -> tuple[FloatArray, FloatArray]:
+    """Zero-phase q̇ [rad/s] and q̈ [rad/s²] of ``q`` [rad], shape (n_samples, n_dof).
+
+    A cubic Savitzky–Golay fit over the odd number of samples (at least 5)
+    closest to ``window`` [s] at the sample period ``dt`` [s].
+    """
+    _, qd, qdd = SavitzkyGolay(dt, window_samples(dt, window), polyorder=3).filter(q)
+    return qd, qdd
+
+
+def window_samples(dt: float, window: float) -> int:
+    """Odd number of samples (>= 5) closest to ``window`` [s] at period ``dt`` [s]."""
+    return max(5, 2 * round(window / dt / 2.0) + 1)
 
 
 def identify_from_logs(
@@ -71,17 +87,15 @@ def identify_from_logs(
             raise InputValueError(
                 f"log {index} has no {'motor torques' if torque == 'motor' else 'tau_j'}"
             )
-        samples = max(5, round(window / log.dt) // 2 * 2 + 1)
+        samples = window_samples(log.dt, window)
         if log.n_samples <= 2 * samples:
             raise InputValueError(
                 f"log {index} has {log.n_samples} samples; the {window} s window needs "
                 f"more than {2 * samples}"
             )
-        derivatives = SavitzkyGolay(log.dt, samples).filter(log.q)
+        qd, qdd = savgol_derivatives(log.q, log.dt, window)
         keep = slice(samples // 2, log.n_samples - samples // 2)
-        for store, values in zip(
-            parts, (log.q, derivatives.velocity, derivatives.acceleration, tau), strict=True
-        ):
+        for store, values in zip(parts, (log.q, qd, qdd, tau), strict=True):
             store.append(np.asarray(values)[keep])
     q, qd, qdd, tau_all = (np.concatenate(store) for store in parts)
     if np.ptp(q, axis=0).max() < 1e-6:

@@ -19,6 +19,7 @@ import pytest
 import sensorless as sl
 from sensorless.exceptions import DimensionError, InputTypeError, InputValueError
 from sensorless.identification import consistent as consistent_module
+from sensorless.identification._log_cholesky import Layout
 from sensorless.identification.consistent import ConsistentFit, consistent_parameters
 from sensorless.simulation.model_error import (
     is_physically_consistent,
@@ -310,7 +311,7 @@ def test_result_table_and_residuals() -> None:
 def test_jacobian_matches_finite_differences() -> None:
     """dπ/dx of the factor parameterisation, with blocks and dead coordinates."""
     zero = {"XY2", "XZ2", "mX2", "XX3", "Ia1", "XY4"}
-    layout = consistent_module._Layout.build(4, zero, MARGIN)
+    layout = Layout.build(4, zero, MARGIN)
     x = np.random.default_rng(16).standard_normal(layout.n_variables) * 0.5
     step = 1e-6
     numeric = np.stack(

@@ -18,13 +18,13 @@ Independent checks:
 from __future__ import annotations
 
 import doctest
+import importlib
 from typing import Any
 
 import numpy as np
 import pytest
 from scipy import signal
 
-import sensorless.observers as observers_module
 from sensorless import robots
 from sensorless.exceptions import DimensionError, InputValueError, LogFormatError
 from sensorless.filters import Butterworth, FiniteDifference, SavitzkyGolay
@@ -479,8 +479,10 @@ def test_acceleration_observer_errors() -> None:
         AccelerationObserver(robot, FiniteDifference(1e-3), torque="sensor")
 
 
-def test_module_examples() -> None:
-    result = doctest.testmod(observers_module, optionflags=doctest.ELLIPSIS)
+@pytest.mark.parametrize("name", ["", ".momentum", ".acceleration", ".observe"])
+def test_module_examples(name: str) -> None:
+    module = importlib.import_module(f"sensorless.observers{name}")
+    result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0 and result.failed == 0
 
 

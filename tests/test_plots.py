@@ -201,7 +201,7 @@ def test_plot_evaluation_artists():
     crosses = [line for line in ax.lines if line.get_marker() == "x"]
     assert [len(line.get_xdata()) for line in crosses] == [1, 2]
     assert [tick.get_text() for tick in ax.get_yticklabels()] == ["none", "time-variant"]
-    single = evaluate(events, log, method="tv").plot()
+    single = plot_evaluation(evaluate(events, log, method="tv"))
     assert [tick.get_text() for tick in single.axes[0].get_yticklabels()] == ["tv"]
 
 

@@ -6,8 +6,11 @@ with time along axis 0.
 
 from __future__ import annotations
 
-__version__ = "0.1.0"
+# isort: off
+# First: modules that still read ``sensorless.__version__`` need it while the package loads.
+from ._version import __version__
 
+# isort: on
 from . import (
     detection,
     evaluation,

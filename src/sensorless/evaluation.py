@@ -36,7 +36,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -46,9 +46,6 @@ from ._validation import FloatArray
 from .exceptions import DimensionError, InputTypeError, InputValueError, LogFormatError
 from .io import Log
 from .signals import Event
-
-if TYPE_CHECKING:
-    from matplotlib.figure import Figure
 
 __all__ = [
     "DEFAULT_MAX_DELAY",
@@ -339,15 +336,6 @@ class Evaluation:
             "max_start_delay": self.max_start_delay,
             "duration": self.duration,
         }
-
-    def plot(self, **kwargs: Any) -> Figure:
-        """Timeline of windows, detections and false alarms.
-
-        Keyword arguments go to :func:`sensorless.plots.plot_evaluation`.
-        """
-        from .plots import plot_evaluation
-
-        return plot_evaluation(self, **kwargs)
 
 
 def _overlaps(

@@ -54,8 +54,8 @@ import scipy.optimize
 import yaml
 from numpy.typing import ArrayLike
 
-from .. import __version__
-from .._validation import FloatArray
+from .._validation import FloatArray, as_float_array, check_int
+from .._version import __version__
 from ..exceptions import DimensionError, InputTypeError, InputValueError
 from ..robots.base_parameters import BaseParameters, base_parameters
 from ..robots.model import RobotModel
@@ -249,34 +249,24 @@ def load_excitation(path: str | Path) -> FourierSeries:
 # ---------------------------------------------------------------------- checks
 
 
-def _integer(value: Any, name: str, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise InputValueError(f"{name} must be an integer >= {minimum}; got {value!r}")
-    return int(value)
+def _joint_limits(
+    value: ArrayLike, n_dof: int, name: str, unit: str, *, positive: bool = False
+) -> FloatArray:
+    """Limits of shape (n_dof,) [unit] from one number for all joints or one per joint.
 
-
-def _per_joint(value: ArrayLike, n_dof: int, name: str, unit: str) -> FloatArray:
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise DimensionError(
-            f"{name} must be a number or an array of shape ({n_dof},) [{unit}]; got {value!r}"
-        ) from None
-    if arr.ndim == 0:
-        arr = np.full(n_dof, float(arr))
-    if arr.shape != (n_dof,):
+    Unlike :func:`sensorless._validation.per_joint`, ``inf`` is accepted here
+    (no limit); NaN is not.
+    """
+    arr = as_float_array(value, name, f"({n_dof},)")
+    if arr.shape not in ((), (n_dof,)):
         raise DimensionError(
             f"{name} must be a number or have shape ({n_dof},) [{unit}] for {n_dof} joints; "
             f"got shape {arr.shape}"
         )
     if np.isnan(arr).any():
         raise InputValueError(f"{name} must not contain NaN; got {arr}")
-    return arr
-
-
-def _positive_limits(value: ArrayLike, n_dof: int, name: str, unit: str) -> FloatArray:
-    arr = _per_joint(value, n_dof, name, unit)
-    if (arr <= 0).any():
+    arr = np.broadcast_to(arr, (n_dof,)).copy()
+    if positive and (arr <= 0).any():
         j = int(np.argmax(arr <= 0))
         raise InputValueError(f"{name} must be positive [{unit}]; joint {j} has {arr[j]:.6g}")
     return arr
@@ -303,8 +293,8 @@ def _limits(
             raise DimensionError(
                 f"position_limits must be a pair (lower, upper) [rad]; got {position_limits!r}"
             )
-        low = _per_joint(position_limits[0], n, "position_limits lower", "rad")
-        high = _per_joint(position_limits[1], n, "position_limits upper", "rad")
+        low = _joint_limits(position_limits[0], n, "position_limits lower", "rad")
+        high = _joint_limits(position_limits[1], n, "position_limits upper", "rad")
         source = "position_limits"
     if not (np.isfinite(low).all() and np.isfinite(high).all()):
         raise InputValueError(
@@ -323,13 +313,15 @@ def _limits(
                 "pass velocity_limits [rad/s]"
             )
     else:
-        velocity = _positive_limits(velocity_limits, n, "velocity_limits", "rad/s")
+        velocity = _joint_limits(velocity_limits, n, "velocity_limits", "rad/s", positive=True)
         if not np.isfinite(velocity).all():
             raise InputValueError(f"velocity_limits must be finite [rad/s]; got {velocity}")
     if acceleration_limits is None:
         acceleration = np.full(n, np.inf)
     else:
-        acceleration = _positive_limits(acceleration_limits, n, "acceleration_limits", "rad/s²")
+        acceleration = _joint_limits(
+            acceleration_limits, n, "acceleration_limits", "rad/s²", positive=True
+        )
     return low, high, velocity, acceleration
 
 
@@ -637,7 +629,7 @@ def optimize_excitation(
             f"base belongs to a robot with {base.robot.n_dof} joints; robot "
             f"{robot.name!r} has {robot.n_dof}"
         )
-    n_harmonics = _integer(n_harmonics, "n_harmonics", 1)
+    n_harmonics = check_int(n_harmonics, "n_harmonics", 1)
     if start_at_rest and n_harmonics < 2:
         raise InputValueError(
             "start_at_rest needs n_harmonics >= 2: with one harmonic q̇(0) = q̈(0) = 0 "
@@ -654,15 +646,15 @@ def optimize_excitation(
     n = robot.n_dof
     if n_samples is None:
         n_samples = max(20 * n_harmonics, 2 * base.count // n + 1)
-    n_samples = _integer(n_samples, "n_samples", 2 * n_harmonics + 1)
+    n_samples = check_int(n_samples, "n_samples", 2 * n_harmonics + 1)
     if n_samples * n <= base.count:
         raise InputValueError(
             f"n_samples · n_dof must exceed the {base.count} base parameters; got "
             f"{n_samples} · {n} = {n_samples * n}"
         )
-    seed = _integer(seed, "seed", 0)
-    n_restarts = _integer(n_restarts, "n_restarts", 1)
-    max_iterations = _integer(max_iterations, "max_iterations", 1)
+    seed = check_int(seed, "seed", 0)
+    n_restarts = check_int(n_restarts, "n_restarts", 1)
+    max_iterations = check_int(max_iterations, "max_iterations", 1)
     limits = _limits(robot, position_limits, velocity_limits, acceleration_limits, limit_margin)
 
     problem = _Problem(base, n_harmonics, frequency, n_samples, limits)

@@ -36,7 +36,7 @@ confidence intervals are then as narrow as the round-off.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterable, Sequence
 
 import numpy as np
 import pandas as pd
@@ -44,11 +44,11 @@ import scipy.linalg
 import scipy.stats
 from numpy.typing import ArrayLike
 
-from .._validation import FloatArray, as_joint_array, check_finite
+from .._validation import FloatArray, as_float_array, as_joint_array, check_finite, check_scalar
 from ..exceptions import DimensionError, InputTypeError, InputValueError
 from ..robots.base_parameters import BaseParameters, base_parameters
 from ..robots.model import RobotModel
-from .regression import RegressionAccumulator, RegressionResult
+from .regression import RegressionAccumulator, RegressionResult, _check_segment, _segments
 
 __all__ = ["contributing_terms", "identify_from_matrices", "matrix_regressors"]
 
@@ -132,13 +132,7 @@ def _check_use(use: str | Iterable[str]) -> tuple[str, ...]:
 def _check_mass_matrix(
     mass_matrix: ArrayLike, n_samples: int, n_dof: int, tolerance: float
 ) -> FloatArray:
-    try:
-        arr = np.asarray(mass_matrix, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise DimensionError(
-            f"mass_matrix must be a numeric array of shape (n_samples, {n_dof}, {n_dof}); "
-            f"could not convert it: {exc}"
-        ) from None
+    arr = as_float_array(mass_matrix, "mass_matrix", f"(n_samples, {n_dof}, {n_dof})")
     if arr.ndim == 2:
         arr = arr[None]
     if arr.shape != (n_samples, n_dof, n_dof):
@@ -157,17 +151,6 @@ def _check_mass_matrix(
             f"{arr[k, c, r]:.6g}. Symmetrise noisy data with 0.5 * (M + M.swapaxes(1, 2))"
         )
     return arr
-
-
-def _check_segment(segment: int) -> int:
-    if isinstance(segment, bool) or not isinstance(segment, (int, np.integer)) or segment < 1:
-        raise InputValueError(f"segment must be a positive integer of samples; got {segment!r}")
-    return int(segment)
-
-
-def _segments(n_samples: int, segment: int) -> Iterator[slice]:
-    for start in range(0, n_samples, segment):
-        yield slice(start, start + segment)
 
 
 def _rows(
@@ -319,10 +302,7 @@ def identify_from_matrices(
     segment = _check_segment(segment)
     if not 0.0 < level < 1.0:
         raise InputValueError(f"level must lie in (0, 1); got {level!r}")
-    if not np.isfinite(symmetry_tolerance) or symmetry_tolerance < 0:
-        raise InputValueError(
-            f"symmetry_tolerance must be a finite number >= 0; got {symmetry_tolerance!r}"
-        )
+    symmetry_tolerance = check_scalar(symmetry_tolerance, "symmetry_tolerance", "-", "nonnegative")
     n = base.robot.n_dof
     q_arr, _ = as_joint_array(q, n, "q")
     m_arr = g_arr = None

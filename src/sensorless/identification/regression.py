@@ -22,7 +22,7 @@ plus f_v q̇.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -32,7 +32,7 @@ import scipy.linalg
 import scipy.stats
 from numpy.typing import ArrayLike
 
-from .._validation import FloatArray, as_joint_array, check_finite
+from .._validation import FloatArray, as_joint_array, check_finite, check_int
 from ..exceptions import DimensionError, InputValueError
 
 if TYPE_CHECKING:
@@ -111,9 +111,7 @@ class RegressionAccumulator:
     """
 
     def __init__(self, n_parameters: int) -> None:
-        if not isinstance(n_parameters, (int, np.integer)) or n_parameters < 1:
-            raise InputValueError(f"n_parameters must be a positive integer; got {n_parameters!r}")
-        p = int(n_parameters)
+        p = check_int(n_parameters, "n_parameters", 1, "RegressionAccumulator")
         self.n_parameters = p
         self.xtx: FloatArray = np.zeros((p, p))
         self.xty: FloatArray = np.zeros(p)
@@ -251,6 +249,7 @@ class RegressionResult:
     Attributes
     ----------
     names : list of str
+        Parameter names, one per column of X.
     estimates : ndarray of shape (p,)
         θ̂ = (XᵀX)⁻¹Xᵀy [units of the parameters].
     std_errors : ndarray of shape (p,)
@@ -260,6 +259,7 @@ class RegressionResult:
     ci_lower, ci_upper : ndarray of shape (p,)
         Confidence interval at ``level`` (Student t with n − p dof).
     level : float
+        Confidence level of the interval [-], in (0, 1).
     r_squared : float
         1 − RSS/Σ(y − ȳ)².
     rss : float
@@ -269,6 +269,7 @@ class RegressionResult:
     condition_number : float
         Condition number of X, sqrt(λ_max/λ_min) of XᵀX.
     n_samples : int
+        Rows of X pooled into the fit.
     covariance : ndarray of shape (p, p)
         σ̂²(XᵀX)⁻¹.
     """
@@ -317,6 +318,19 @@ def least_squares(
     """
     x_arr, y_arr = _as_matrix(X, y, None)
     return RegressionAccumulator(x_arr.shape[1]).add(x_arr, y_arr).result(names)
+
+
+def _check_segment(segment: int) -> int:
+    """Samples per segment of a pooled regression, a positive integer."""
+    if isinstance(segment, bool) or not isinstance(segment, (int, np.integer)) or segment < 1:
+        raise InputValueError(f"segment must be a positive integer of samples; got {segment!r}")
+    return int(segment)
+
+
+def _segments(n_samples: int, segment: int) -> Iterator[slice]:
+    """Consecutive slices of ``segment`` samples (the last may be shorter)."""
+    for start in range(0, n_samples, segment):
+        yield slice(start, start + segment)
 
 
 def _friction_columns(qd: FloatArray) -> FloatArray:
@@ -368,8 +382,7 @@ def identify_base_parameters(
 
     if friction not in _FRICTION_OPTIONS:
         raise InputValueError(f"friction must be one of {_FRICTION_OPTIONS}; got {friction!r}")
-    if not isinstance(segment, (int, np.integer)) or segment < 1:
-        raise InputValueError(f"segment must be a positive integer of samples; got {segment!r}")
+    segment = _check_segment(segment)
     n_dof = robot.n_dof
     arrays = [as_joint_array(a, n_dof, nm)[0] for a, nm in ((q, "q"), (qd, "qd"), (qdd, "qdd"))]
     tau_arr = as_joint_array(tau, n_dof, "tau")[0]
@@ -384,8 +397,7 @@ def identify_base_parameters(
         for kind in ("c_pos", "c_neg", "fv"):
             names += [f"{kind}{j + 1}" for j in range(n_dof)]
     acc = RegressionAccumulator(len(names))
-    for start in range(0, tau_arr.shape[0], int(segment)):
-        part = slice(start, start + int(segment))
+    for part in _segments(tau_arr.shape[0], segment):
         q_s, qd_s, qdd_s = (a[part] for a in arrays)
         blocks = base.regressor(q_s, qd_s, qdd_s)
         if friction is not None:
@@ -462,13 +474,15 @@ class RelativeWeightSignificance:
     Attributes
     ----------
     names : list of str
+        Predictor names, one per column of X (the noise column excluded).
     raw : ndarray of shape (p,)
-        Relative weights of the original predictors (without the noise column).
+        Relative weights of the original predictors [-] (they sum to R²).
     lower, upper : ndarray of shape (p,)
         Percentile confidence interval of ε_j − ε_noise.
     significant : ndarray of bool, shape (p,)
         True when the interval excludes 0 (lower > 0).
     alpha : float
+        1 − confidence level of the interval [-].
     """
 
     names: list[str]
@@ -519,15 +533,14 @@ def relative_weight_significance(
     """
     x_arr, y_arr = _as_matrix(X, y, None)
     labels = _default_names(x_arr.shape[1], names)
-    if not isinstance(n_boot, (int, np.integer)) or n_boot < 10:
-        raise InputValueError(f"n_boot must be an integer >= 10; got {n_boot!r}")
+    n_boot = check_int(n_boot, "n_boot", 10)
     if not 0.0 < alpha < 1.0:
         raise InputValueError(f"alpha must lie in (0, 1); got {alpha!r}")
     rng = np.random.default_rng(seed)
     augmented = np.column_stack([x_arr, rng.standard_normal(x_arr.shape[0])])
     n = x_arr.shape[0]
-    diffs = np.empty((int(n_boot), x_arr.shape[1]))
-    for b in range(int(n_boot)):
+    diffs = np.empty((n_boot, x_arr.shape[1]))
+    for b in range(n_boot):
         rows = rng.integers(0, n, n)
         raw_b = relative_weights(augmented[rows], y_arr[rows])[0]
         diffs[b] = raw_b[:-1] - raw_b[-1]
@@ -549,12 +562,14 @@ class EliminationReport:
     Attributes
     ----------
     names : list of str
+        All parameter names, one per column of X.
     iterations : list of DataFrame
         One per fit, indexed by all names, columns ``estimate``, ``t``,
         ``relative_weight`` [%] and ``kept``; parameters dropped earlier show 0.
     final_estimates : ndarray of shape (p,)
         Estimates of the last fit, zero for dropped parameters.
     kept : list of str
+        Names of the parameters left after the elimination.
     converged : bool
         False when ``max_iterations`` ended while parameters were still dropped.
     result : RegressionResult
@@ -605,15 +620,14 @@ def eliminate(
     """
     acc = _accumulate(X, y)
     labels = _default_names(acc.n_parameters, names)
-    if not isinstance(max_iterations, (int, np.integer)) or max_iterations < 1:
-        raise InputValueError(f"max_iterations must be a positive integer; got {max_iterations!r}")
+    max_iterations = check_int(max_iterations, "max_iterations", 1)
     active = np.arange(acc.n_parameters)
     iterations: list[pd.DataFrame] = []
     converged = False
     final = np.zeros(acc.n_parameters)
     kept = active
     result = acc.result(labels)
-    for iteration in range(int(max_iterations)):
+    for iteration in range(max_iterations):
         sub = acc.subset(active)
         if iteration > 0:
             result = sub.result([labels[k] for k in active])

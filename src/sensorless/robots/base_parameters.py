@@ -84,14 +84,9 @@ class BaseParameters:
     def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> FloatArray:
         """Base regressor Y_b(q, q̇, q̈) with Y_b θ = inverse dynamics.
 
-        Parameters
-        ----------
-        q, qd, qdd : array-like of shape (n_dof,) or (n_samples, n_dof)
-            Joint positions [rad], velocities [rad/s], accelerations [rad/s²].
-
-        Returns
-        -------
-        ndarray of shape (n_dof, count) or (n_samples, n_dof, count)
+        The columns :attr:`independent` of :meth:`RobotModel.regressor`, which
+        takes the same joint positions [rad], velocities [rad/s] and
+        accelerations [rad/s²]; shape (n_dof, count) or (n_samples, n_dof, count).
         """
         return np.asarray(self.robot.regressor(q, qd, qdd)[..., self.independent])
 

@@ -7,19 +7,16 @@ dynamics method accepts one sample, arrays of shape ``(n_dof,)``, or a time
 series, arrays of shape ``(n_samples, n_dof)`` with time along axis 0, and
 returns results of the matching rank. Units are SI and radians.
 
-Standard inertial parameters follow thesis Table 2.5: per link
-``XX, XY, XZ, YY, YZ, ZZ`` (inertia tensor about the link frame origin,
-[kg m²]), ``mX, mY, mZ`` (first moments [kg m]), ``m`` [kg], plus ``Ia``, the
-joint-side armature Jm·G² [kg m²] of the motor driving the joint. The link
-frame is the frame of the joint that moves the link (for a modified DH table
-it is Craig's frame *i*).
+Standard inertial parameters and their order are those of
+:mod:`sensorless.robots.inertia` (thesis Table 2.5 plus the armature ``Ia``).
+The link frame is the frame of the joint that moves the link (for a modified
+DH table it is Craig's frame *i*). The Pinocchio models themselves are built
+in :mod:`sensorless.robots.builders`.
 """
 
 from __future__ import annotations
 
-import math
-import xml.etree.ElementTree as ET
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -29,197 +26,46 @@ import pandas as pd
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._validation import FloatArray, as_joint_array, check_finite
-from ..exceptions import DimensionError, InputValueError, ModelError
+from .._validation import FloatArray, as_float_array, as_joint_array, check_finite
+from ..exceptions import DimensionError, ModelError
+from .builders import (
+    Convention,
+    LinksLike,
+    MotorsLike,
+    TableOptions,
+    model_from_table,
+    model_from_urdf,
+)
+from .inertia import (
+    N_LINK_PARAMETERS,
+    PARAMETER_NAMES,
+    LinkInertia,
+    MotorData,
+    inertia_from_parameters,
+    parameters_from_inertia,
+    standard_regressor,
+)
 
 if TYPE_CHECKING:
+    from typing import Unpack
+
     from ..friction import FrictionModel
 
 __all__ = [
+    "N_LINK_PARAMETERS",
     "PARAMETER_NAMES",
+    "DHOptions",
     "LinkInertia",
     "MotorData",
     "RobotModel",
 ]
 
-#: Standard parameters of one link, in the order of thesis Table 2.5 plus the armature.
-PARAMETER_NAMES: tuple[str, ...] = (
-    "XX", "XY", "XZ", "YY", "YZ", "ZZ", "mX", "mY", "mZ", "m", "Ia",
-)  # fmt: skip
-N_LINK_PARAMETERS = len(PARAMETER_NAMES)
-# Pinocchio's dynamic parameters are [m, mx, my, mz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz];
-# _PIN_TO_THESIS[k] is the index in Pinocchio's vector of PARAMETER_NAMES[k].
-_PIN_TO_THESIS = np.array([4, 5, 7, 6, 8, 9, 1, 2, 3, 0])
-_MDH_FIELDS = ("alpha", "a", "theta", "d")
-_GRIPPER_WORDS = ("finger", "gripper", "hand")
 
+class DHOptions(TableOptions, total=False):
+    """Keyword options of :meth:`RobotModel.from_mdh` and :meth:`RobotModel.from_dh`."""
 
-@dataclass(frozen=True)
-class LinkInertia:
-    """Inertial parameters of one rigid link.
-
-    Parameters
-    ----------
-    mass : float
-        Link mass [kg], non-negative.
-    com : array-like of shape (3,)
-        Centre of mass in the link frame [m].
-    inertia : array-like of shape (3, 3) or (6,)
-        Inertia tensor about the centre of mass, axes of the link frame
-        [kg m²]; a 6-vector is read as (xx, xy, xz, yy, yz, zz).
-    """
-
-    mass: float
-    com: ArrayLike
-    inertia: ArrayLike
-
-    def __post_init__(self) -> None:
-        com = np.asarray(self.com, dtype=float)
-        inertia = np.asarray(self.inertia, dtype=float)
-        if inertia.shape == (6,):
-            xx, xy, xz, yy, yz, zz = inertia
-            inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
-        if com.shape != (3,):
-            raise ModelError(f"centre of mass must have 3 entries [m]; got shape {com.shape}")
-        if inertia.shape != (3, 3):
-            raise ModelError(
-                "inertia must be a 3x3 tensor or (xx, xy, xz, yy, yz, zz) [kg m²]; "
-                f"got shape {inertia.shape}"
-            )
-        if not (np.isfinite(self.mass) and np.isfinite(com).all() and np.isfinite(inertia).all()):
-            raise ModelError("link mass, centre of mass and inertia must be finite")
-        if self.mass < 0:
-            raise ModelError(f"link mass must be >= 0 kg; got {self.mass}")
-        object.__setattr__(self, "mass", float(self.mass))
-        object.__setattr__(self, "com", com)
-        object.__setattr__(self, "inertia", 0.5 * (inertia + inertia.T))
-
-    @classmethod
-    def coerce(cls, value: LinkInertia | Mapping[str, Any]) -> LinkInertia:
-        """Accept a :class:`LinkInertia` or a mapping with keys ``mass, com, inertia``."""
-        if isinstance(value, LinkInertia):
-            return value
-        missing = [key for key in ("mass", "com", "inertia") if key not in value]
-        if missing:
-            raise ModelError(
-                "link inertial data needs keys mass, com, inertia; "
-                f"missing {missing} in {dict(value)}"
-            )
-        return cls(value["mass"], value["com"], value["inertia"])
-
-    def to_pinocchio(self) -> pin.Inertia:
-        """Pinocchio spatial inertia of this link, expressed in the link frame."""
-        return pin.Inertia(self.mass, np.asarray(self.com), np.asarray(self.inertia))
-
-
-@dataclass(frozen=True)
-class MotorData:
-    """Per-joint motor data giving the joint-side armature Jm·G².
-
-    Parameters
-    ----------
-    rotor_inertia : array-like of shape (n_dof,)
-        Rotor inertia Jm on the motor side [kg m²].
-    gear_ratio : array-like of shape (n_dof,)
-        Gear ratio G (motor angle / joint angle) [-]; its sign is irrelevant here.
-    """
-
-    rotor_inertia: ArrayLike
-    gear_ratio: ArrayLike
-
-    def __post_init__(self) -> None:
-        jm = np.atleast_1d(np.asarray(self.rotor_inertia, dtype=float))
-        ratio = np.atleast_1d(np.asarray(self.gear_ratio, dtype=float))
-        if jm.shape != ratio.shape or jm.ndim != 1:
-            raise ModelError(
-                "rotor_inertia and gear_ratio must be 1-D arrays of the same length; "
-                f"got shapes {jm.shape} and {ratio.shape}"
-            )
-        if (jm < 0).any() or not np.isfinite(jm).all() or not np.isfinite(ratio).all():
-            raise ModelError(f"rotor inertias must be finite and >= 0 kg m²; got {jm}")
-        object.__setattr__(self, "rotor_inertia", jm)
-        object.__setattr__(self, "gear_ratio", ratio)
-
-    @property
-    def armature(self) -> FloatArray:
-        """Joint-side armature Jm·G² [kg m²], shape (n_dof,)."""
-        return np.asarray(self.rotor_inertia) * np.asarray(self.gear_ratio) ** 2
-
-
-def _rot_x(angle: float) -> FloatArray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
-
-
-def _rot_z(angle: float) -> FloatArray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
-def _se3(rotation: FloatArray, translation: ArrayLike) -> pin.SE3:
-    return pin.SE3(rotation, np.asarray(translation, dtype=float))
-
-
-def _dh_rows(table: Any, kind: str) -> list[dict[str, float]]:
-    """Read a DH table (DataFrame, sequence of mappings or of 4-sequences) into dicts."""
-    if isinstance(table, pd.DataFrame):
-        rows: list[Any] = table.to_dict("records")
-    else:
-        rows = list(table)
-    if not rows:
-        raise ModelError(f"the {kind} DH table is empty; expected one row per joint")
-    out = []
-    for index, row in enumerate(rows, start=1):
-        if isinstance(row, Mapping):
-            missing = [key for key in _MDH_FIELDS if key not in row or row[key] is None]
-            if missing:
-                raise ModelError(
-                    f"{kind} DH row {index} is missing {missing}; every row needs "
-                    f"{list(_MDH_FIELDS)} (alpha, theta offset [rad]; a, d [m])"
-                )
-            values = {key: row[key] for key in _MDH_FIELDS}
-        else:
-            seq = list(row)
-            if len(seq) != 4:
-                raise ModelError(
-                    f"{kind} DH row {index} has {len(seq)} fields; expected 4 in the order "
-                    f"{list(_MDH_FIELDS)}"
-                )
-            values = dict(zip(_MDH_FIELDS, seq, strict=True))
-        try:
-            parsed = {key: float(value) for key, value in values.items()}
-        except (TypeError, ValueError):
-            raise ModelError(f"{kind} DH row {index} has a non-numeric field: {values}") from None
-        if not all(math.isfinite(v) for v in parsed.values()):
-            raise ModelError(f"{kind} DH row {index} has a non-finite field: {parsed}")
-        for key in ("alpha", "theta"):
-            if abs(parsed[key]) > 2 * math.pi + 1e-9:
-                raise InputValueError(
-                    f"{kind} DH row {index}: {key} = {parsed[key]} is larger than 2π; angles "
-                    "are radians (this looks like degrees: use numpy.deg2rad)"
-                )
-        out.append(parsed)
-    return out
-
-
-def _coerce_links(links: Sequence[Any], n_dof: int) -> list[LinkInertia]:
-    if len(links) != n_dof:
-        raise DimensionError(
-            f"expected inertial data for {n_dof} links (one per DH row); got {len(links)}"
-        )
-    return [LinkInertia.coerce(link) for link in links]
-
-
-def _armature(motors: MotorData | Mapping[str, Any] | None, n_dof: int) -> FloatArray:
-    if motors is None:
-        return np.zeros(n_dof)
-    if not isinstance(motors, MotorData):
-        motors = MotorData(motors["rotor_inertia"], motors["gear_ratio"])
-    if motors.armature.shape != (n_dof,):
-        raise DimensionError(
-            f"motor data must have {n_dof} entries (one per joint); got {motors.armature.shape[0]}"
-        )
-    return motors.armature
+    friction: FrictionModel | None
+    description: str
 
 
 @dataclass(frozen=True, eq=False)
@@ -267,18 +113,7 @@ class RobotModel:
     # ------------------------------------------------------------------ builders
     @classmethod
     def from_mdh(
-        cls,
-        table: Any,
-        links: Sequence[LinkInertia | Mapping[str, Any]],
-        motors: MotorData | Mapping[str, Any] | None = None,
-        *,
-        gravity: ArrayLike = (0.0, 0.0, -9.81),
-        friction: FrictionModel | None = None,
-        name: str = "robot",
-        description: str = "",
-        position_limits: tuple[ArrayLike, ArrayLike] | None = None,
-        velocity_limits: ArrayLike | None = None,
-        effort_limits: ArrayLike | None = None,
+        cls, table: Any, links: LinksLike, motors: MotorsLike = None, **options: Unpack[DHOptions]
     ) -> RobotModel:
         """Build a revolute arm from a modified DH table (Craig convention).
 
@@ -296,44 +131,22 @@ class RobotModel:
             [kg m²] of each link, in its link frame *i*.
         motors : MotorData or mapping, optional
             Rotor inertia [kg m²] and gear ratio per joint; armature = Jm·G².
-        gravity : array-like of shape (3,)
-            Gravity in the base frame [m/s²].
+        gravity : array-like of shape (3,), default (0, 0, -9.81)
+            Gravity in the base frame [m/s²] (keyword only, as all that follow).
         friction : FrictionModel, optional
             Joint friction.
+        name : str, default "robot"
+            Human-readable name.
+        description : str, default ""
+            Where the numbers come from.
         position_limits, velocity_limits, effort_limits : optional
             Joint limits (lower, upper) [rad], [rad/s], [N m]; unlimited by default.
         """
-        rows = _dh_rows(table, "modified")
-        n_dof = len(rows)
-        inertias = _coerce_links(links, n_dof)
-        model = pin.Model()
-        model.name = name
-        parent = 0
-        for i, (row, link) in enumerate(zip(rows, inertias, strict=True), start=1):
-            rotation = _rot_x(row["alpha"]) @ _rot_z(row["theta"])
-            translation = np.array([row["a"], 0.0, 0.0]) + rotation @ np.array([0, 0, row["d"]])
-            placement = _se3(rotation, translation)
-            parent = model.addJoint(parent, pin.JointModelRZ(), placement, f"joint{i}")
-            model.appendBodyToJoint(parent, link.to_pinocchio(), pin.SE3.Identity())
-        return cls._finish(
-            model, _armature(motors, n_dof), gravity, friction, name, description,
-            position_limits, velocity_limits, effort_limits,
-        )  # fmt: skip
+        return cls._from_table("modified", table, links, motors, **options)
 
     @classmethod
     def from_dh(
-        cls,
-        table: Any,
-        links: Sequence[LinkInertia | Mapping[str, Any]],
-        motors: MotorData | Mapping[str, Any] | None = None,
-        *,
-        gravity: ArrayLike = (0.0, 0.0, -9.81),
-        friction: FrictionModel | None = None,
-        name: str = "robot",
-        description: str = "",
-        position_limits: tuple[ArrayLike, ArrayLike] | None = None,
-        velocity_limits: ArrayLike | None = None,
-        effort_limits: ArrayLike | None = None,
+        cls, table: Any, links: LinksLike, motors: MotorsLike = None, **options: Unpack[DHOptions]
     ) -> RobotModel:
         """Build a revolute arm from a standard (distal) DH table.
 
@@ -343,24 +156,22 @@ class RobotModel:
         parameters is the joint frame z_{i-1} rotated by q_i.
         Parameters as in :meth:`from_mdh`.
         """
-        rows = _dh_rows(table, "standard")
-        n_dof = len(rows)
-        inertias = _coerce_links(links, n_dof)
-        model = pin.Model()
-        model.name = name
-        parent = 0
-        previous_tail = pin.SE3.Identity()
-        for i, (row, link) in enumerate(zip(rows, inertias, strict=True), start=1):
-            placement = previous_tail * _se3(_rot_z(row["theta"]), np.zeros(3))
-            parent = model.addJoint(parent, pin.JointModelRZ(), placement, f"joint{i}")
-            # Frame i relative to the moving joint frame: Tz(d) Tx(a) Rx(alpha).
-            tail = _se3(_rot_x(row["alpha"]), [row["a"], 0.0, row["d"]])
-            model.appendBodyToJoint(parent, link.to_pinocchio(), tail)
-            previous_tail = tail
-        return cls._finish(
-            model, _armature(motors, n_dof), gravity, friction, name, description,
-            position_limits, velocity_limits, effort_limits,
-        )  # fmt: skip
+        return cls._from_table("standard", table, links, motors, **options)
+
+    @classmethod
+    def _from_table(
+        cls,
+        convention: Convention,
+        table: Any,
+        links: LinksLike,
+        motors: MotorsLike,
+        *,
+        friction: FrictionModel | None = None,
+        description: str = "",
+        **options: Unpack[TableOptions],
+    ) -> RobotModel:
+        model = model_from_table(table, links, motors, convention=convention, **options)
+        return cls(model, model.name, friction, description)
 
     @classmethod
     def from_urdf(
@@ -392,40 +203,13 @@ class RobotModel:
             Joint friction (URDF ``<dynamics>`` tags are ignored).
         armature : array-like of shape (n_dof,), optional
             Joint-side rotor inertia Jm·G² [kg m²].
+        name : str, optional
+            Human-readable name; by default the URDF's robot name.
+        description : str
+            Where the numbers come from.
         """
-        path = Path(path)
-        if not path.is_file():
-            raise ModelError(f"URDF file not found: {path}")
-        try:
-            tree = ET.parse(path)
-        except ET.ParseError as exc:
-            raise ModelError(f"cannot parse URDF {path}: {exc}") from None
-        root = tree.getroot()
-        if tip is not None:
-            _prune_urdf(root, tip)
-        try:
-            full = pin.buildModelFromXML(ET.tostring(root, encoding="unicode"))
-        except (RuntimeError, ValueError) as exc:
-            raise ModelError(f"Pinocchio could not build a model from {path}: {exc}") from None
-        movable = [full.names[j] for j in range(1, full.njoints) if full.joints[j].nv > 0]
-        if joints is None:
-            joints = [j for j in movable if not any(w in j.lower() for w in _GRIPPER_WORDS)]
-        unknown = [j for j in joints if j not in movable]
-        if unknown:
-            raise ModelError(
-                f"joints {unknown} are not movable joints of {path}; options: {movable}"
-            )
-        lock = [full.getJointId(j) for j in movable if j not in joints]
-        model = pin.buildReducedModel(full, lock, pin.neutral(full)) if lock else full
-        order = [model.names[j] for j in range(1, model.njoints)]
-        if order != list(joints):
-            raise ModelError(f"joints must be listed in chain order {order}; got {list(joints)}")
-        n_dof = model.nv
-        arm = np.zeros(n_dof) if armature is None else np.asarray(armature, dtype=float)
-        if arm.shape != (n_dof,):
-            raise DimensionError(f"armature must have {n_dof} entries; got shape {arm.shape}")
-        model.armature = arm
-        return cls(model, name or str(root.get("name", path.stem)), friction, description)
+        model = model_from_urdf(path, joints, tip=tip, armature=armature)
+        return cls(model, name or model.name, friction, description)
 
     @classmethod
     def from_pinocchio(
@@ -433,34 +217,6 @@ class RobotModel:
     ) -> RobotModel:
         """Wrap an existing Pinocchio model (copied); its ``armature`` is the joint armature."""
         return cls(model, name or model.name or "robot", friction)
-
-    @classmethod
-    def _finish(
-        cls,
-        model: pin.Model,
-        armature: FloatArray,
-        gravity: ArrayLike,
-        friction: FrictionModel | None,
-        name: str,
-        description: str,
-        position_limits: tuple[ArrayLike, ArrayLike] | None,
-        velocity_limits: ArrayLike | None,
-        effort_limits: ArrayLike | None,
-    ) -> RobotModel:
-        n_dof = model.nv
-        model.armature = armature
-        grav = np.asarray(gravity, dtype=float)
-        if grav.shape != (3,) or not np.isfinite(grav).all():
-            raise ModelError(f"gravity must be a finite 3-vector [m/s²]; got {gravity!r}")
-        model.gravity = pin.Motion(grav, np.zeros(3))
-        inf = np.full(n_dof, np.inf)
-        lower, upper = (-inf, inf) if position_limits is None else position_limits
-        model.lowerPositionLimit = np.broadcast_to(np.asarray(lower, float), (n_dof,)).copy()
-        model.upperPositionLimit = np.broadcast_to(np.asarray(upper, float), (n_dof,)).copy()
-        for attr, value in (("velocityLimit", velocity_limits), ("effortLimit", effort_limits)):
-            arr = inf if value is None else np.broadcast_to(np.asarray(value, float), (n_dof,))
-            setattr(model, attr, arr.copy())
-        return cls(model, name, friction, description)
 
     # ------------------------------------------------------------------ properties
     @property
@@ -512,7 +268,7 @@ class RobotModel:
         model = self.pinocchio_model
         out = np.empty((self.n_dof, N_LINK_PARAMETERS))
         for i in range(self.n_dof):
-            out[i, :10] = model.inertias[i + 1].toDynamicParameters()[_PIN_TO_THESIS]
+            out[i, :10] = parameters_from_inertia(model.inertias[i + 1])
         out[:, 10] = model.armature
         return out.ravel()
 
@@ -541,8 +297,9 @@ class RobotModel:
         friction : FrictionModel or None, optional
             New friction model; by default the current one is kept.
         """
-        values = np.asarray(parameters, dtype=float).reshape(-1)
         expected = self.n_dof * N_LINK_PARAMETERS
+        shape = f"({expected},) or ({self.n_dof}, {N_LINK_PARAMETERS})"
+        values = as_float_array(parameters, "standard parameters", shape).reshape(-1)
         if values.shape != (expected,):
             raise DimensionError(
                 f"expected {expected} standard parameters ({self.n_dof} links x 11); "
@@ -552,7 +309,7 @@ class RobotModel:
         per_link = values.reshape(self.n_dof, N_LINK_PARAMETERS)
         model = self.pinocchio_model.copy()
         for i in range(self.n_dof):
-            model.inertias[i + 1] = _inertia_from_parameters(per_link[i, :10], i + 1)
+            model.inertias[i + 1] = inertia_from_parameters(per_link[i, :10], i + 1)
         model.armature = per_link[:, 10].copy()
         new_friction = self.friction if friction == "keep" else friction
         return RobotModel(model, name or self.name, new_friction, self.description)
@@ -571,6 +328,21 @@ class RobotModel:
                 f"samples; got {[a.shape[0] for a in out]}"
             )
         return out, singles == {True}
+
+    def _per_sample(
+        self, algorithm: Callable[..., Any], shape: tuple[int, ...], *states: tuple[ArrayLike, str]
+    ) -> FloatArray:
+        """Apply ``algorithm(model, data, *state)`` to every sample of the (value, label) states.
+
+        The result has ``shape`` per sample, with a leading sample axis unless
+        every state was one sample of shape ``(n_dof,)``.
+        """
+        arrays, single = self._states(*states)
+        model, data = self.pinocchio_model, self._data
+        out = np.empty((arrays[0].shape[0], *shape))
+        for k, sample in enumerate(zip(*arrays, strict=True)):
+            out[k] = algorithm(model, data, *sample)
+        return out[0] if single else out
 
     def link_id(self, link: int | str) -> int:
         """Pinocchio joint id of ``link``: a 1-based link number or a joint name."""
@@ -597,14 +369,9 @@ class RobotModel:
         -------
         ndarray of shape (n_dof, n_dof) or (n_samples, n_dof, n_dof)
         """
-        (qs,), single = self._states((q, "q"))
-        model, data = self.pinocchio_model, self._data
-        out = np.empty((qs.shape[0], self.n_dof, self.n_dof))
-        for k, qk in enumerate(qs):
-            out[k] = pin.crba(model, data, qk)
+        upper = self._per_sample(pin.crba, (self.n_dof, self.n_dof), (q, "q"))
         # CRBA fills the upper triangle; mirror it once for the whole batch.
-        out = np.triu(out) + np.swapaxes(np.triu(out, 1), 1, 2)
-        return out[0] if single else out
+        return np.triu(upper) + np.swapaxes(np.triu(upper, 1), -1, -2)
 
     def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike) -> FloatArray:
         """Coriolis/centrifugal matrix C(q, q̇) with Ṁ − 2C skew-symmetric [kg m²/s].
@@ -618,12 +385,8 @@ class RobotModel:
         -------
         ndarray of shape (n_dof, n_dof) or (n_samples, n_dof, n_dof)
         """
-        (qs, qds), single = self._states((q, "q"), (qd, "qd"))
-        model, data = self.pinocchio_model, self._data
-        out = np.empty((qs.shape[0], self.n_dof, self.n_dof))
-        for k in range(qs.shape[0]):
-            out[k] = pin.computeCoriolisMatrix(model, data, qs[k], qds[k])
-        return out[0] if single else out
+        shape = (self.n_dof, self.n_dof)
+        return self._per_sample(pin.computeCoriolisMatrix, shape, (q, "q"), (qd, "qd"))
 
     def coriolis_transpose_velocity(self, q: ArrayLike, qd: ArrayLike) -> FloatArray:
         """C(q, q̇)ᵀ q̇ [N m], the term of the momentum observer (eq. 4.4).
@@ -637,12 +400,7 @@ class RobotModel:
         -------
         ndarray of shape (n_dof,) or (n_samples, n_dof)
         """
-        (qs, qds), single = self._states((q, "q"), (qd, "qd"))
-        model, data = self.pinocchio_model, self._data
-        out = np.empty_like(qs)
-        for k in range(qs.shape[0]):
-            out[k] = pin.computeCoriolisMatrix(model, data, qs[k], qds[k]).T @ qds[k]
-        return out[0] if single else out
+        return self._per_sample(_coriolis_transpose_velocity, (self.n_dof,), (q, "q"), (qd, "qd"))
 
     def gravity(self, q: ArrayLike) -> FloatArray:
         """Gravity torque g(q) [N m].
@@ -656,21 +414,11 @@ class RobotModel:
         -------
         ndarray of shape (n_dof,) or (n_samples, n_dof)
         """
-        (qs,), single = self._states((q, "q"))
-        model, data = self.pinocchio_model, self._data
-        out = np.empty_like(qs)
-        for k in range(qs.shape[0]):
-            out[k] = pin.computeGeneralizedGravity(model, data, qs[k])
-        return out[0] if single else out
+        return self._per_sample(pin.computeGeneralizedGravity, (self.n_dof,), (q, "q"))
 
     def nonlinear_effects(self, q: ArrayLike, qd: ArrayLike) -> FloatArray:
         """C(q, q̇) q̇ + g(q) [N m]; shapes as in :meth:`coriolis_transpose_velocity`."""
-        (qs, qds), single = self._states((q, "q"), (qd, "qd"))
-        model, data = self.pinocchio_model, self._data
-        out = np.empty_like(qs)
-        for k in range(qs.shape[0]):
-            out[k] = pin.nonLinearEffects(model, data, qs[k], qds[k])
-        return out[0] if single else out
+        return self._per_sample(pin.nonLinearEffects, (self.n_dof,), (q, "q"), (qd, "qd"))
 
     def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> FloatArray:
         """Rigid-body torque M(q) q̈ + C(q, q̇) q̇ + g(q) [N m] (RNEA), friction excluded.
@@ -684,12 +432,8 @@ class RobotModel:
         -------
         ndarray of shape (n_dof,) or (n_samples, n_dof)
         """
-        (qs, qds, qdds), single = self._states((q, "q"), (qd, "qd"), (qdd, "qdd"))
-        model, data = self.pinocchio_model, self._data
-        out = np.empty_like(qs)
-        for k in range(qs.shape[0]):
-            out[k] = pin.rnea(model, data, qs[k], qds[k], qdds[k])
-        return out[0] if single else out
+        states = (q, "q"), (qd, "qd"), (qdd, "qdd")
+        return self._per_sample(pin.rnea, (self.n_dof,), *states)
 
     def friction_torque(self, qd: ArrayLike) -> FloatArray:
         """Steady-state friction torque of the attached friction model [N m].
@@ -721,24 +465,9 @@ class RobotModel:
         -------
         ndarray of shape (n_dof, 11·n_dof) or (n_samples, n_dof, 11·n_dof)
         """
-        (qs, qds, qdds), single = self._states((q, "q"), (qd, "qd"), (qdd, "qdd"))
-        out = np.zeros((qs.shape[0], self.n_dof, self.n_dof * N_LINK_PARAMETERS))
-        self._fill_regressor(qs, qds, qdds, out)
-        return out[0] if single else out
-
-    def _fill_regressor(
-        self, qs: FloatArray, qds: FloatArray, qdds: FloatArray, out: FloatArray
-    ) -> None:
-        n = self.n_dof
-        inertial = (np.arange(n)[:, None] * N_LINK_PARAMETERS + np.arange(10)).ravel()
-        source = (np.arange(n)[:, None] * 10 + _PIN_TO_THESIS).ravel()
-        rows = np.arange(n)
-        model, data = self.pinocchio_model, self._data
-        armature = rows * N_LINK_PARAMETERS + 10
-        for k in range(qs.shape[0]):
-            y10 = pin.computeJointTorqueRegressor(model, data, qs[k], qds[k], qdds[k])
-            out[k][:, inertial] = y10[:, source]
-            out[k][rows, armature] = qdds[k]
+        shape = (self.n_dof, self.n_dof * N_LINK_PARAMETERS)
+        states = (q, "q"), (qd, "qd"), (qdd, "qdd")
+        return self._per_sample(standard_regressor, shape, *states)
 
     def regressor_terms(self, q: ArrayLike) -> FloatArray:
         """Split regressor Y_k^q(q) of eq. 3.10–3.12: Y(q, q̇, q̈) = Σ_k Y_k^q(q) Q_k.
@@ -757,25 +486,9 @@ class RobotModel:
         ndarray of shape (l, n_dof, 11·n_dof) or (n_samples, l, n_dof, 11·n_dof)
             With l = (n² + 3n + 2)/2.
         """
-        (qs,), single = self._states((q, "q"))
         n = self.n_dof
-        upper_i, upper_j = np.triu_indices(n, 1)
-        n_pairs = upper_i.size
-        eye = np.eye(n)
-        # Unit states that isolate each term: g, then q̈ = e_i, q̇ = e_i, q̇ = e_i + e_j.
-        velocities = np.vstack([np.zeros((1 + n, n)), eye, eye[upper_i] + eye[upper_j]])
-        accelerations = np.vstack([np.zeros((1, n)), eye, np.zeros((n + n_pairs, n))])
-        n_states = velocities.shape[0]
-        samples = np.zeros((n_states, n, n * N_LINK_PARAMETERS))
-        out = np.empty((qs.shape[0], n_states, n, n * N_LINK_PARAMETERS))
-        for k, qk in enumerate(qs):
-            self._fill_regressor(np.tile(qk, (n_states, 1)), velocities, accelerations, samples)
-            y_g = samples[0]
-            y_m = samples[1 : n + 1] - y_g
-            y_c = samples[n + 1 : 2 * n + 1] - y_g
-            y_b = samples[2 * n + 1 :] - y_g - y_c[upper_i] - y_c[upper_j]
-            out[k] = np.concatenate([y_m, y_b, y_c, y_g[None]])
-        return out[0] if single else out
+        shape = ((n * n + 3 * n + 2) // 2, n, n * N_LINK_PARAMETERS)
+        return self._per_sample(_regressor_terms, shape, (q, "q"))
 
     def regressor_term_labels(self) -> list[str]:
         """Labels of :meth:`regressor_terms`: ``M1.., B12.., C1.., g``."""
@@ -819,14 +532,13 @@ class RobotModel:
         -------
         ndarray of shape (4, 4) or (n_samples, 4, 4)
         """
-        (qs,), single = self._states((q, "q"))
         jid = self.link_id(link)
-        model, data = self.pinocchio_model, self._data
-        out = np.empty((qs.shape[0], 4, 4))
-        for k in range(qs.shape[0]):
-            pin.forwardKinematics(model, data, qs[k])
-            out[k] = data.oMi[jid].homogeneous
-        return out[0] if single else out
+
+        def pose(model: pin.Model, data: pin.Data, qk: FloatArray) -> FloatArray:
+            pin.forwardKinematics(model, data, qk)
+            return np.asarray(data.oMi[jid].homogeneous)
+
+        return self._per_sample(pose, (4, 4), (q, "q"))
 
     def forward_kinematics(
         self, q: ArrayLike, link: int | str, point: ArrayLike = (0.0, 0.0, 0.0)
@@ -872,24 +584,22 @@ class RobotModel:
         -------
         ndarray of shape (6, n_dof) or (n_samples, 6, n_dof)
         """
-        (qs,), single = self._states((q, "q"))
         jid = self.link_id(link)
         p = self._point(point)
-        model, data = self.pinocchio_model, self._data
-        out = np.empty((qs.shape[0], 6, self.n_dof))
         frame = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-        for k in range(qs.shape[0]):
-            pin.computeJointJacobians(model, data, qs[k])
+
+        def jacobian(model: pin.Model, data: pin.Data, qk: FloatArray) -> FloatArray:
+            pin.computeJointJacobians(model, data, qk)
             jac = pin.getJointJacobian(model, data, jid, frame)  # at the joint origin
-            lin, ang = jac[:3], jac[3:]
+            linear, angular = jac[:3], jac[3:]
             arm = data.oMi[jid].rotation @ p
-            out[k, :3] = lin - np.cross(arm, ang.T).T
-            out[k, 3:] = ang
-        return out[0] if single else out
+            return np.vstack([linear - np.cross(arm, angular.T).T, angular])
+
+        return self._per_sample(jacobian, (6, self.n_dof), (q, "q"))
 
     @staticmethod
     def _point(point: ArrayLike) -> FloatArray:
-        p = np.asarray(point, dtype=float)
+        p = as_float_array(point, "point", "(3,)")
         if p.shape != (3,) or not np.isfinite(p).all():
             raise DimensionError(
                 f"point must be a finite 3-vector in the link frame [m]; got {point!r}"
@@ -897,46 +607,29 @@ class RobotModel:
         return p
 
 
-def _inertia_from_parameters(values: FloatArray, link: int) -> pin.Inertia:
-    """Spatial inertia from (XX, XY, XZ, YY, YZ, ZZ, mX, mY, mZ, m) about the link origin.
-
-    Pinocchio's ``FromDynamicParameters`` divides by the mass; a massless link
-    (PUMA link 1) keeps its rotational inertia here instead of turning into NaN.
-    """
-    xx, xy, xz, yy, yz, zz, mx, my, mz, mass = values
-    inertia_origin = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
-    first_moment = np.array([mx, my, mz])
-    if mass > 0:
-        com = first_moment / mass
-        shift = mass * (com @ com * np.eye(3) - np.outer(com, com))
-        return pin.Inertia(mass, com, inertia_origin - shift)
-    if mass < 0 or np.any(first_moment != 0):
-        raise ModelError(
-            f"link {link}: mass must be >= 0 and a massless link has zero first moments; "
-            f"got m = {mass}, (mX, mY, mZ) = {tuple(first_moment)}"
-        )
-    return pin.Inertia(0.0, np.zeros(3), inertia_origin)
+def _coriolis_transpose_velocity(
+    model: pin.Model, data: pin.Data, q: FloatArray, qd: FloatArray
+) -> FloatArray:
+    """C(q, q̇)ᵀ q̇ [N m] of one sample."""
+    return np.asarray(pin.computeCoriolisMatrix(model, data, q, qd).T @ qd)
 
 
-def _prune_urdf(root: ET.Element, tip: str) -> None:
-    """Remove from a URDF tree every link that is not ``tip`` or one of its ancestors."""
-    links = {link.get("name") for link in root.findall("link")}
-    if tip not in links:
-        raise ModelError(f"tip link {tip!r} not in the URDF; options: {sorted(map(str, links))}")
-    parent_of: dict[str, str] = {}
-    for joint in root.findall("joint"):
-        child, parent = joint.find("child"), joint.find("parent")
-        if child is None or parent is None:
-            raise ModelError(f"URDF joint {joint.get('name')!r} needs a parent and a child link")
-        parent_of[str(child.get("link"))] = str(parent.get("link"))
-    keep = {tip}
-    node = tip
-    while node in parent_of:
-        node = parent_of[node]
-        keep.add(node)
-    for link in root.findall("link"):
-        if link.get("name") not in keep:
-            root.remove(link)
-    for joint in root.findall("joint"):
-        if str(joint.find("child").get("link")) not in keep:  # type: ignore[union-attr]
-            root.remove(joint)
+def _regressor_terms(model: pin.Model, data: pin.Data, q: FloatArray) -> FloatArray:
+    """Split regressor of one sample (:meth:`RobotModel.regressor_terms`)."""
+    n = model.nv
+    upper_i, upper_j = np.triu_indices(n, 1)
+    eye = np.eye(n)
+    # Unit states that isolate each term: g, then q̈ = e_i, q̇ = e_i, q̇ = e_i + e_j.
+    velocities = np.vstack([np.zeros((1 + n, n)), eye, eye[upper_i] + eye[upper_j]])
+    accelerations = np.vstack([np.zeros((1, n)), eye, np.zeros((n + upper_i.size, n))])
+    samples = np.array(
+        [
+            standard_regressor(model, data, q, qd, qdd)
+            for qd, qdd in zip(velocities, accelerations, strict=True)
+        ]
+    )
+    y_g = samples[0]
+    y_m = samples[1 : n + 1] - y_g
+    y_c = samples[n + 1 : 2 * n + 1] - y_g
+    y_b = samples[2 * n + 1 :] - y_g - y_c[upper_i] - y_c[upper_j]
+    return np.concatenate([y_m, y_b, y_c, y_g[None]])

@@ -282,6 +282,7 @@ def perturb_inertia(
     Returns
     -------
     RobotModel
+        The perturbed model, with the friction model of ``robot``.
 
     Raises
     ------
@@ -289,7 +290,14 @@ def perturb_inertia(
         If ``relative`` is not a finite number in [0, 1).
     """
     fraction = _check_relative(relative, "relative")
-    generator = np.random.default_rng(rng)
+    model = _perturbed_inertias(robot, fraction, np.random.default_rng(rng))
+    return RobotModel(model, name or robot.name, robot.friction, robot.description)
+
+
+def _perturbed_inertias(
+    robot: RobotModel, fraction: float, generator: np.random.Generator
+) -> pin.Model:
+    """Copy of ``robot``'s Pinocchio model with the draws of :func:`perturb_inertia` applied."""
     factors = _factors(generator, fraction, (robot.n_dof, _N_FACTORS))
     rigid = _rigid_bodies(robot, _DEFAULT_TOL)
     # Rebuilt from (m, c, I_com) rather than through with_standard_parameters,
@@ -307,7 +315,7 @@ def perturb_inertia(
             axes @ np.diag(moments) @ axes.T,
         )
     model.armature = robot.armature * factors[:, 7]
-    return RobotModel(model, name or robot.name, robot.friction, robot.description)
+    return model
 
 
 @overload
@@ -403,11 +411,15 @@ def perturb(
     Returns
     -------
     RobotModel
+        The nominal model, with inertial parameters as :func:`perturb_inertia`
+        and friction as :func:`perturb_friction` would draw them.
 
     Raises
     ------
     InputValueError
         If ``relative`` or ``friction_relative`` is not a finite number in [0, 1).
+    ModelError
+        If the friction model of ``robot`` is not a dataclass of numeric parameters.
     """
     fraction = _check_relative(relative, "relative")
     friction_fraction = (
@@ -416,6 +428,6 @@ def perturb(
         else _check_relative(friction_relative, "friction_relative")
     )
     generator = np.random.default_rng(seed)
-    inertial = perturb_inertia(robot, fraction, generator, name=name)
+    model = _perturbed_inertias(robot, fraction, generator)
     friction = perturb_friction(robot.friction, friction_fraction, generator)
-    return RobotModel(inertial.pinocchio_model, inertial.name, friction, inertial.description)
+    return RobotModel(model, name or robot.name, friction, robot.description)

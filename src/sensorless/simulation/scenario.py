@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from .. import __version__
+from .._version import __version__
 from ..exceptions import InputValueError, ModelError, UnknownNameError
 from ..friction import Coulomb, CoulombViscous, LuGre
 from ..io import write_log

@@ -54,7 +54,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validation import FloatArray, as_joint_array
+from .._validation import FloatArray, as_joint_array, check_finite
 from ..exceptions import DimensionError, InputTypeError, InputValueError
 
 __all__ = ["SensorModel", "SensorState"]
@@ -220,8 +220,7 @@ class SensorModel:
         if np.any(resolution):
             step = np.where(resolution > 0.0, resolution, 1.0)
             values = np.where(resolution > 0.0, np.round(values / step) * step, values)
-        values = self._add_noise(values, "position_noise", rng)
-        return values[0] if single else values
+        return self._reading(values, "position_noise", rng, single)
 
     def measure_motor_torque(
         self, tau_m: ArrayLike, rng: np.random.Generator | None = None
@@ -244,8 +243,7 @@ class SensorModel:
         gain_error = self._per_joint("motor_torque_gain_error", values.shape[1])
         if np.any(gain_error):
             values = (1.0 + gain_error) * values
-        values = self._add_noise(values, "motor_torque_noise", rng)
-        return values[0] if single else values
+        return self._reading(values, "motor_torque_noise", rng, single)
 
     def measure_joint_torque(
         self, tau_j: ArrayLike, state: SensorState, rng: np.random.Generator | None = None
@@ -297,8 +295,7 @@ class SensorModel:
         bias = self._per_joint("torque_sensor_bias", n_dof)
         if np.any(bias):
             played = played + bias
-        played = self._add_noise(played, "torque_sensor_noise", rng)
-        return (played[0] if single else played), SensorState(output)
+        return self._reading(played, "torque_sensor_noise", rng, single), SensorState(output)
 
     # ------------------------------------------------------------------ helpers
     def _values(self, name: str) -> FloatArray:
@@ -308,18 +305,19 @@ class SensorModel:
         """Parameter ``name`` as an array of shape (n_dof,); DimensionError on a length mismatch."""
         return _per_joint(name, getattr(self, name), n_dof)
 
-    def _add_noise(
-        self, values: FloatArray, name: str, rng: np.random.Generator | None
+    def _reading(
+        self, values: FloatArray, noise: str, rng: np.random.Generator | None, single: bool
     ) -> FloatArray:
-        std = self._per_joint(name, values.shape[1])
-        if not np.any(std):
-            return values
-        if not isinstance(rng, np.random.Generator):
-            raise InputTypeError(
-                f"{name} is on, so a numpy.random.Generator is needed "
-                f"(numpy.random.default_rng(seed)); got rng={rng!r}"
-            )
-        return values + std * rng.standard_normal(values.shape)
+        """Add the white noise of parameter ``noise``; one sample in gives one sample out."""
+        std = self._per_joint(noise, values.shape[1])
+        if np.any(std):
+            if not isinstance(rng, np.random.Generator):
+                raise InputTypeError(
+                    f"{noise} is on, so a numpy.random.Generator is needed "
+                    f"(numpy.random.default_rng(seed)); got rng={rng!r}"
+                )
+            values = values + std * rng.standard_normal(values.shape)
+        return values[0] if single else values
 
 
 def _parameter(name: str, value: Any) -> float | tuple[float, ...]:
@@ -335,8 +333,7 @@ def _parameter(name: str, value: Any) -> float | tuple[float, ...]:
             f"SensorModel.{name} must be a scalar or a non-empty array of shape (n_dof,); "
             f"got shape {arr.shape}"
         )
-    if not np.isfinite(arr).all():
-        raise InputValueError(f"SensorModel.{name} must be finite; got {value!r}")
+    check_finite(np.atleast_1d(arr), f"SensorModel.{name}")
     bound = _BOUNDS[name]
     if bound is not None:
         lower, strict, meaning = bound

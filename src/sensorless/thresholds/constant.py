@@ -36,10 +36,8 @@ class ConstantThreshold(Threshold):
     ----------
     margin : float or array-like of shape (n_dof,)
         Added to β [N m], >= 0.
-    joints : sequence of int, optional
-        Monitored joints (1-based); None for all.
-    transient : float
-        Time skipped at the start of every fit run [s].
+    joints, transient
+        As for every family, see :class:`~sensorless.thresholds.base.Threshold`.
 
     Attributes
     ----------

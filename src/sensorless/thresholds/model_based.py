@@ -76,14 +76,9 @@ from ..robots import load as load_robot
 from ..robots.base_parameters import BaseParameters, base_parameters
 from ..robots.model import N_LINK_PARAMETERS, RobotModel
 from ..signals import ObserverSignals
-from .base import (
-    BoolArray,
-    Threshold,
-    ThresholdInputs,
-    ThresholdState,
-    regular_period,
-    rounding_guard,
-)
+from .base import BoolArray, Threshold, rounding_guard
+from .checks import check_bound, regular_period
+from .state import ThresholdInputs, ThresholdState
 
 __all__ = ["ModelBasedThreshold"]
 
@@ -91,6 +86,9 @@ _REVOLUTE = ("JointModelRX", "JointModelRY", "JointModelRZ")
 _UNALIGNED = "JointModelRevoluteUnaligned"
 # The QR behind base_parameters is the slow part of a refit; models are immutable.
 _BASE_CACHE: weakref.WeakKeyDictionary[RobotModel, BaseParameters] = weakref.WeakKeyDictionary()
+
+States = tuple[FloatArray, FloatArray]
+"""Joint positions q [rad] and estimated accelerations q̂̈ [rad/s²] of a run, each (n_samples, n_dof)."""
 
 
 class ModelBasedThreshold(Threshold):
@@ -115,11 +113,9 @@ class ModelBasedThreshold(Threshold):
     reference_window : float
         Length [s] of the Savitzky–Golay window that gives the reference
         derivatives when ``bq`` is learned; at least 5 samples.
-    joints : sequence of int, optional
-        Monitored joints (1-based); None for all.
-    transient : float
-        Time skipped at the start of every fit run [s] (e.g. the start-up of
-        the velocity/acceleration filter).
+    joints, transient
+        As for every family, see :class:`~sensorless.thresholds.base.Threshold`
+        (``transient`` e.g. the start-up of the velocity/acceleration filter).
     chunk_size : int
         Samples per batch of the split regressor (bounds memory).
 
@@ -257,17 +253,15 @@ class ModelBasedThreshold(Threshold):
     def _fit(self, runs: list[ObserverSignals], keep: list[BoolArray], margin: FloatArray) -> None:
         robot = self.robot_model()
         n_dof = robot.n_dof
-        for i, run in enumerate(runs):
-            self._check_run(run, n_dof, f"fit run {i}")
-        b_d = _per_joint_bound(self.disturbance, n_dof, "disturbance")
-        bq = self._learn_bq(runs, keep) if self.bq is None else check_bq(self.bq, n_dof)
+        states = [self._check_run(run, n_dof, f"fit run {i}") for i, run in enumerate(runs)]
+        b_d = check_bound(self.disturbance, n_dof, "disturbance")
+        bq = self._learn_bq(runs, keep, states) if self.bq is None else check_bq(self.bq, n_dof)
         base = _base_parameters(robot)
         theta = base.values_of(robot)
         btheta = parameter_bounds(self.btheta, theta)
         excess = np.zeros(n_dof)
         guard = np.zeros(n_dof)
-        for run, k in zip(runs, keep, strict=True):
-            position, acceleration = _require_states(run.position, run.acceleration, "fit run")
+        for run, k, (position, acceleration) in zip(runs, keep, states, strict=True):
             terms = error_bound_terms(
                 robot, base.independent, theta, position[k], run.velocity[k], acceleration[k],
                 bq, btheta, chunk_size=self.chunk_size,
@@ -284,12 +278,14 @@ class ModelBasedThreshold(Threshold):
         self.b_fr_ = excess + margin + guard
         self.b_d_ = b_d
 
-    def _learn_bq(self, runs: list[ObserverSignals], keep: list[BoolArray]) -> FloatArray:
+    def _learn_bq(
+        self, runs: list[ObserverSignals], keep: list[BoolArray], states: list[States]
+    ) -> FloatArray:
+        """B_Q̃ from checked runs and their (position, acceleration)."""
         bq = np.zeros(q_length(runs[0].n_dof))
-        for i, run in enumerate(runs):
+        for i, (run, (position, acceleration)) in enumerate(zip(runs, states, strict=True)):
             dt = regular_period(run.t, f"fit run {i}")
             window = _window_samples(self.reference_window, dt)
-            position, acceleration = _require_states(run.position, run.acceleration, "fit run")
             reference = SavitzkyGolay(dt, window, polyorder=3).filter(position)
             error = q_vector(run.velocity, acceleration) - q_vector(
                 reference.velocity, reference.acceleration
@@ -341,7 +337,8 @@ class ModelBasedThreshold(Threshold):
             acceleration, self.bq_, self.btheta_, chunk_size=self.chunk_size,
         )  # fmt: skip
 
-    def _check_run(self, run: ObserverSignals, n_dof: int, what: str) -> None:
+    def _check_run(self, run: ObserverSignals, n_dof: int, what: str) -> States:
+        """Check a fit run; return its positions [rad] and accelerations [rad/s²]."""
         if run.kind != "acceleration":
             raise InputValueError(
                 f"ModelBasedThreshold bounds the acceleration-based estimate τ̂_c (eq. 3.16): "
@@ -349,7 +346,7 @@ class ModelBasedThreshold(Threshold):
             )
         if run.n_dof != n_dof:
             raise DimensionError(f"the nominal robot has {n_dof} joints; {what} has {run.n_dof}")
-        _require_states(run.position, run.acceleration, what)
+        return _require_states(run.position, run.acceleration, what)
 
 
 # ------------------------------------------------------------------------- helpers
@@ -363,30 +360,13 @@ def _base_parameters(robot: RobotModel) -> BaseParameters:
     return base
 
 
-def _per_joint_bound(value: Any, n_dof: int, name: str) -> FloatArray:
-    try:
-        array = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        array = np.full(n_dof, np.nan)
-    if array.ndim == 0:
-        array = np.full(n_dof, float(array))
-    if array.shape != (n_dof,):
-        raise DimensionError(
-            f"{name} must be a scalar or have shape ({n_dof},) for {n_dof} joints; "
-            f"got shape {array.shape}"
-        )
-    if not np.isfinite(array).all() or (array < 0).any():
-        raise InputValueError(f"{name} must be finite and >= 0 [N m]; got {value!r}")
-    return array
-
-
 def _model_part(terms: BoundTerms) -> FloatArray:
     return np.asarray(terms.q_error + terms.cross + terms.parameter_error)
 
 
 def _require_states(
     position: FloatArray | None, acceleration: FloatArray | None, what: str
-) -> tuple[FloatArray, FloatArray]:
+) -> States:
     missing = [
         name
         for name, value in (("position", position), ("acceleration", acceleration))

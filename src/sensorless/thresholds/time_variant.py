@@ -57,6 +57,7 @@ __all__ = ["FORMS", "TimeVariantThreshold"]
 FIT_METHODS = ("least_squares", "minimax")
 FORMS = ("friction", "hysteretic")
 """Forms of the friction term: ε_fr·filtered friction (eq. 5.33), -C·filtered sign (eq. 5.39)."""
+_COEFFICIENTS = {"friction": "eps_fr_", "hysteretic": "c_"}
 
 
 class TimeVariantThreshold(Threshold):
@@ -68,10 +69,8 @@ class TimeVariantThreshold(Threshold):
         Added to α (and to β) [N m], >= 0.
     form : {"friction", "hysteretic"}
         Friction term of eq. (5.33) or of eq. (5.39).
-    joints : sequence of int, optional
-        Monitored joints (1-based); None for all.
-    transient : float
-        Time skipped at the start of every fit run [s] (e.g. a few 1/K_I).
+    joints, transient
+        As for every family, see :class:`~sensorless.thresholds.base.Threshold`.
     fit_method : {"least_squares", "minimax"}
         How γ and ε_fr (or C) are fitted (see the module docstring).
     max_lp_samples : int
@@ -129,7 +128,7 @@ class TimeVariantThreshold(Threshold):
         return str(self.form)
 
     def _coefficient_name(self) -> str:
-        return "eps_fr_" if self._check_form() == "friction" else "c_"
+        return _COEFFICIENTS[self._check_form()]
 
     def _attribute_names(self) -> tuple[str, ...]:
         return ("alpha_", "gamma_", self._coefficient_name(), "beta_")
@@ -137,8 +136,8 @@ class TimeVariantThreshold(Threshold):
     def _centre(
         self, gamma: FloatArray, coefficient: FloatArray, inputs: ThresholdInputs
     ) -> FloatArray:
-        """b_2V(t) = γ h + ε_fr f (eq. 5.29) or γ h - C·sign (eq. 5.39)."""
-        if self._check_form() == "friction":
+        """b_2V(t) = γ h + ε_fr f (eq. 5.29) or γ h - C·sign (eq. 5.39); ``form`` is checked."""
+        if self.form == "friction":
             return gamma * inputs.model_torque + coefficient * inputs.friction
         return gamma * inputs.model_torque - coefficient * inputs.sign
 
@@ -172,7 +171,8 @@ class TimeVariantThreshold(Threshold):
     def _run(
         self, state: ThresholdState, inputs: ThresholdInputs
     ) -> tuple[FloatArray, FloatArray, ThresholdState]:
-        centre = self._centre(self.gamma_, getattr(self, self._coefficient_name()), inputs)
+        # form was checked by fit or from_dict (through _attribute_names)
+        centre = self._centre(self.gamma_, getattr(self, _COEFFICIENTS[self.form]), inputs)
         return centre - self.alpha_, centre + self.alpha_, state
 
 

@@ -1,0 +1,39 @@
+"""The whole detection pipeline: velocity estimation, observer, threshold, detector.
+
+:func:`tune` fits a threshold family on collision-free logs (:mod:`.tuning`);
+a :class:`CollisionMonitor` applies it to a recorded log
+(:meth:`~CollisionMonitor.run`, :meth:`~CollisionMonitor.process`) or to a
+live stream one sample at a time (:meth:`~CollisionMonitor.step`), with the
+same result (:mod:`.stream`, :mod:`.batch`), under the fault, restart,
+settling and latching rules of :mod:`.policy`. Observer settings travel with
+the fitted threshold in one YAML file (:func:`save_tuned`, :func:`load_tuned`).
+Units SI and radians; time along axis 0.
+"""
+
+from __future__ import annotations
+
+from .batch import FaultSpan, MonitorRun
+from .policy import Limits, StreamPolicy
+from .stream import CollisionMonitor
+from .tuning import (
+    METHOD_NAMES,
+    ObserverSettings,
+    load_tuned,
+    make_threshold,
+    save_tuned,
+    tune,
+)
+
+__all__ = [
+    "METHOD_NAMES",
+    "CollisionMonitor",
+    "FaultSpan",
+    "Limits",
+    "MonitorRun",
+    "ObserverSettings",
+    "StreamPolicy",
+    "load_tuned",
+    "make_threshold",
+    "save_tuned",
+    "tune",
+]

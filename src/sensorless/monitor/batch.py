@@ -1,0 +1,227 @@
+"""The monitor over a whole log: the stream's rules, computed over whole arrays.
+
+A log is cut into segments at the samples the stream would call faults
+(outside the limits of :class:`~sensorless.monitor.policy.StreamPolicy`, a
+velocity estimate beyond its limit, a non-finite observer output). Each
+segment runs as a stream that restarts at its first sample: observer from
+scratch, settling window, then threshold and detector. Units SI and radians;
+time along axis 0, arrays of shape ``(n_samples, n_dof)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pandas as pd
+
+from .._validation import FloatArray
+from ..exceptions import InputValueError
+from ..io import Log
+from ..signals import Event, ObserverSignals
+
+if TYPE_CHECKING:
+    from .stream import CollisionMonitor
+
+__all__ = ["FaultSpan", "MonitorRun"]
+
+_SERIES = ("residual", "model_torque", "friction", "sign", "velocity", "acceleration")
+
+
+@dataclass(frozen=True)
+class FaultSpan:
+    """Consecutive samples of a log that the monitor refused.
+
+    Attributes
+    ----------
+    start, end : float
+        Time of the first and the last refused sample [s].
+    n_samples : int
+        Number of refused samples.
+    reason : str
+        Why the first of them was refused.
+    """
+
+    start: float
+    end: float
+    n_samples: int
+    reason: str
+
+
+@dataclass(frozen=True, eq=False)
+class MonitorRun:
+    """What :meth:`CollisionMonitor.process` found in a log.
+
+    Attributes
+    ----------
+    signals : ObserverSignals
+        Observer signals of the whole log; NaN at refused samples.
+    events : list of Event
+        Detected events, in time order.
+    faults : list of FaultSpan
+        Refused spans; the stream restarts after each.
+    settling : ndarray of bool, shape (n_samples,)
+        Samples inside a settling window (judged by nothing).
+    """
+
+    signals: ObserverSignals
+    events: list[Event]
+    faults: list[FaultSpan]
+    settling: np.ndarray
+
+    def faults_to_pandas(self) -> pd.DataFrame:
+        """One row per fault span: start [s], end [s], n_samples, reason."""
+        return pd.DataFrame(
+            [(f.start, f.end, f.n_samples, f.reason) for f in self.faults],
+            columns=["start", "end", "n_samples", "reason"],
+        )
+
+
+def run_log(monitor: CollisionMonitor, log: Log, *, strict: bool) -> MonitorRun:
+    """Process ``log`` as :meth:`CollisionMonitor.step` would, segment by segment."""
+    kind = monitor.settings.kind
+    tau = np.asarray(log.tau_j if kind == "joint" else log.tau_m)
+    if tau is None or tau.ndim != 2:
+        group = "tau_j" if kind == "joint" else "tau_m"
+        raise InputValueError(f"observer kind {kind!r} needs the {group} columns; the log has none")
+    t, q = np.asarray(log.t), np.asarray(log.q)
+    n_samples, n_dof = q.shape
+    bad = monitor.limits.bad_rows(q, None, tau)
+    reasons: dict[int, str] = {}  # refused inside a segment, by sample index
+    out = {name: np.full((n_samples, n_dof), np.nan) for name in _SERIES}
+    settling = np.zeros(n_samples, dtype=bool)
+    events: list[Event] = []
+    start = 0
+    while start < n_samples:
+        if bad[start]:
+            start += 1
+            continue
+        stop = start + int(np.argmax(bad[start:])) if bad[start:].any() else n_samples
+        end, reason = _segment(monitor, t, q, tau, start, stop, out, settling, events)
+        if end < stop:  # a fault found inside the segment: refuse that sample, restart after it
+            bad[end] = True
+            reasons[end] = reason
+        start = end + 1 if end < stop else stop
+    if strict and bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        why = reasons.get(k) or _reason(monitor, q[k], tau[k])
+        raise InputValueError(f"sample {k} (t = {t[k]:.6g} s) is a fault: {why}")
+    faults = _spans(t, bad, lambda k: reasons.get(k) or _reason(monitor, q[k], tau[k]))
+    signals = ObserverSignals(
+        t=t,
+        residual=out["residual"],
+        model_torque=out["model_torque"],
+        friction=out["friction"],
+        sign=out["sign"],
+        velocity=out["velocity"],
+        gain=monitor._observer.gain if kind != "acceleration" else np.full(n_dof, np.nan),
+        kind=kind,
+        robot=monitor.robot.name,
+        position=q,
+        acceleration=out["acceleration"] if kind == "acceleration" else None,
+        metadata={**log.metadata, "observer": monitor._observer.settings(), "faults": len(faults)},
+    )
+    return MonitorRun(signals, sorted(events, key=lambda e: e.start), faults, settling)
+
+
+def _segment(
+    monitor: CollisionMonitor,
+    t: FloatArray,
+    q: FloatArray,
+    tau: FloatArray,
+    start: int,
+    stop: int,
+    out: dict[str, FloatArray],
+    settling: np.ndarray,
+    events: list[Event],
+) -> tuple[int, str]:
+    """Run samples [start, stop) as one stream; return where it ended and why.
+
+    The stream ends early at the first sample the stream would refuse (a
+    velocity estimate beyond its limit, a non-finite observer output); that
+    index and the reason are returned, else ``(stop, "")``.
+    """
+    block = slice(start, stop)
+    estimator = monitor.estimator
+    derivatives, _ = estimator.filter(q[block], estimator.initial_state(q[start]))
+    velocity, acceleration = derivatives.velocity, derivatives.acceleration
+    observer: Any = monitor._observer
+    if monitor.settings.kind == "acceleration":
+        signals, _ = observer.run(t[block], q[block], tau[block])
+    else:
+        state = observer.initial_state(q[start], np.zeros(q.shape[1]))
+        signals, _ = observer.run(t[block], q[block], velocity, tau[block], state)
+    finite = np.isfinite(
+        np.stack([signals.residual, signals.model_torque, signals.friction, signals.sign])
+    ).all(axis=(0, 2))
+    if monitor.settings.kind == "acceleration" or _uses_acceleration(monitor):
+        finite &= np.isfinite(acceleration).all(axis=1)
+    fast = ~(np.abs(velocity) <= monitor.limits.velocity).all(axis=1)
+    refused = ~finite | fast
+    end = stop
+    reason = ""
+    if refused.any():
+        k = int(np.argmax(refused))
+        end = start + k
+        reason = (
+            monitor.limits.describe("qd", velocity[k])
+            if fast[k]
+            else "the observer's output is not finite for this sample"
+        )
+        if k == 0:
+            return end, reason
+        return _segment(monitor, t, q, tau, start, end, out, settling, events)[0], reason
+    for name in _SERIES:
+        values = acceleration if name == "acceleration" else getattr(signals, name)
+        if values is not None:
+            out[name][block] = values
+    settled = int(np.searchsorted(t[block] - t[start], monitor.settle, side="left"))
+    settling[start : start + settled] = True
+    if settled < stop - start:
+        part = _slice(signals, settled, acceleration)
+        events.extend(monitor.detector.detect(part))
+    return end, reason
+
+
+def _uses_acceleration(monitor: CollisionMonitor) -> bool:
+    return bool(monitor._outputs[2])
+
+
+def _slice(
+    signals: ObserverSignals, first: int, acceleration: FloatArray | None
+) -> ObserverSignals:
+    """The signals from sample ``first`` on (the threshold starts after the settling)."""
+    return ObserverSignals(
+        t=signals.t[first:],
+        residual=signals.residual[first:],
+        model_torque=signals.model_torque[first:],
+        friction=signals.friction[first:],
+        sign=signals.sign[first:],
+        velocity=signals.velocity[first:],
+        gain=signals.gain,
+        kind=signals.kind,
+        robot=signals.robot,
+        position=None if signals.position is None else signals.position[first:],
+        acceleration=None if acceleration is None else acceleration[first:],
+        metadata=signals.metadata,
+    )
+
+
+def _reason(monitor: CollisionMonitor, q: FloatArray, tau: FloatArray) -> str:
+    limits = monitor.limits
+    if not limits.position_ok(q):
+        return limits.describe("q", q)
+    return limits.describe("tau_j" if monitor.settings.kind == "joint" else "tau_m", tau)
+
+
+def _spans(t: FloatArray, bad: np.ndarray, reason: Any) -> list[FaultSpan]:
+    """Group consecutive refused samples into spans."""
+    if not bad.any():
+        return []
+    edges = np.diff(np.concatenate([[0], bad.astype(np.int8), [0]]))
+    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    return [
+        FaultSpan(float(t[a]), float(t[b - 1]), int(b - a), reason(int(a)))
+        for a, b in zip(starts, stops, strict=True)
+    ]

@@ -1,0 +1,225 @@
+"""Tuning: observer settings, threshold families by name, fit on collision-free logs, files.
+
+:func:`tune` fits a threshold family on collision-free logs; observer settings
+travel with the fitted threshold in one YAML file (:func:`save_tuned`,
+:func:`load_tuned`), so a threshold is never applied to residuals computed
+differently from those it was fitted on. Units SI and radians; time along axis 0.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from .._validation import check_dt
+from ..exceptions import InputTypeError, InputValueError, UnknownNameError
+from ..filters import Butterworth, CausalEstimator, DirtyDerivative, FiniteDifference
+from ..io import Log
+from ..observers import default_estimator, observe
+from ..robots.model import RobotModel
+from ..signals import ObserverSignals
+from ..thresholds import (
+    ConstantThreshold,
+    ModelBasedThreshold,
+    Threshold,
+    TimeVariantThreshold,
+    VelocityThreshold,
+)
+
+__all__ = [
+    "METHOD_NAMES",
+    "ObserverSettings",
+    "load_tuned",
+    "make_threshold",
+    "save_tuned",
+    "tune",
+]
+
+#: Threshold families by the names the CLI uses, with the observer each one watches.
+METHOD_NAMES: dict[str, str] = {
+    "constant": "motor",
+    "time-variant": "motor",
+    "hysteretic": "motor",
+    "velocity": "motor",
+    "model": "acceleration",
+}
+_FILTERS = ("default", "finite_difference", "dirty_derivative", "butterworth")
+
+
+@dataclass(frozen=True)
+class ObserverSettings:
+    """How residuals are computed from a log or a stream.
+
+    Parameters
+    ----------
+    kind : {"motor", "joint", "acceleration"}
+        r̂ from motor torques (eq. 4.4), r̂_s from joint torque sensors (eq. 4.9),
+        or the acceleration-based τ̂_c (eq. 3.16).
+    gain : float
+        Observer gain K_I [1/s] (momentum observers; §5.4 uses 20).
+    filter : {"default", "finite_difference", "dirty_derivative", "butterworth"}
+        Velocity/acceleration estimator; "default" is
+        :func:`sensorless.observers.default_estimator`.
+    cutoff : float
+        Cut-off [Hz] of the dirty derivative or Butterworth filter.
+    order : int
+        Butterworth order (the thesis used 5).
+    """
+
+    kind: str = "motor"
+    gain: float = 20.0
+    filter: str = "default"
+    cutoff: float = 20.0
+    order: int = 5
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("motor", "joint", "acceleration"):
+            raise InputValueError(
+                f"observer kind must be motor, joint or acceleration; got {self.kind!r}"
+            )
+        if self.filter not in _FILTERS:
+            raise InputValueError(f"filter must be one of {list(_FILTERS)}; got {self.filter!r}")
+        if not np.isfinite(self.gain) or self.gain <= 0:
+            raise InputValueError(f"observer gain K_I must be > 0 [1/s]; got {self.gain}")
+
+    def estimator(self, dt: float) -> CausalEstimator:
+        """The velocity/acceleration estimator for sample period ``dt`` [s]."""
+        period = check_dt(dt)
+        if self.filter == "finite_difference":
+            return FiniteDifference(period)
+        if self.filter == "dirty_derivative":
+            return DirtyDerivative(period, self.cutoff)
+        if self.filter == "butterworth":
+            return Butterworth(period, self.cutoff, self.order)
+        return default_estimator(period, self.kind)
+
+    def settle_time(self, dt: float) -> float:
+        """Start-up time [s] after which the residual has forgotten its start.
+
+        A momentum observer's residual decays as exp(−K_I t) from its start
+        (eq. 3.6): 5/K_I leaves less than 1 % of a start-up error. The
+        acceleration-based estimate has no memory but the estimator's: five
+        times its delay. At least ten samples either way.
+        """
+        period = check_dt(dt)
+        if self.kind == "acceleration":
+            memory = 5.0 * max(self.estimator(period).delays.acceleration, period)
+        else:
+            memory = 5.0 / self.gain
+        return max(memory, 10.0 * period)
+
+    def observe(self, log: Log, robot: RobotModel) -> ObserverSignals:
+        """Residual signals of a whole log (see :func:`sensorless.observers.observe`)."""
+        return observe(log, robot, kind=self.kind, gain=self.gain, estimator=self.estimator(log.dt))
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain values for a YAML file."""
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> ObserverSettings:
+        """Inverse of :meth:`to_dict`; unknown keys are a TypeError listing the valid ones."""
+        valid = set(cls.__dataclass_fields__)
+        unknown = set(data) - valid
+        if unknown:
+            raise InputTypeError(
+                f"unknown observer settings {sorted(unknown)}; valid: {sorted(valid)}"
+            )
+        return cls(**data)
+
+
+def make_threshold(method: str, robot: RobotModel, **options: Any) -> Threshold:
+    """An unfitted threshold of the family ``method`` (one of :data:`METHOD_NAMES`)."""
+    if method == "constant":
+        return ConstantThreshold(**options)
+    if method == "time-variant":
+        return TimeVariantThreshold(form="friction", **options)
+    if method == "hysteretic":
+        return TimeVariantThreshold(form="hysteretic", **options)
+    if method == "velocity":
+        return VelocityThreshold(**options)
+    if method == "model":
+        return ModelBasedThreshold(robot, **options)
+    raise UnknownNameError(f"unknown threshold method {method!r}; options: {sorted(METHOD_NAMES)}")
+
+
+def tune(
+    logs: Sequence[Log],
+    robot: RobotModel,
+    method: str,
+    settings: ObserverSettings | None = None,
+    **options: Any,
+) -> tuple[Threshold, ObserverSettings]:
+    """Fit a threshold family on collision-free logs.
+
+    Parameters
+    ----------
+    logs : sequence of Log
+        Collision-free runs of the robot.
+    robot : RobotModel
+        The nominal model the observer uses.
+    method : str
+        One of :data:`METHOD_NAMES`.
+    settings : ObserverSettings, optional
+        Observer settings; by default the observer the method watches, K_I = 20.
+    **options
+        Hyper-parameters of the threshold (``margin``, ``joints``, ``transient``...).
+        ``transient`` [s], the start of each log left out of the fit, defaults to
+        the observer's :meth:`ObserverSettings.settle_time`: a log that begins in
+        motion starts with a residual excursion that is the observer's, not the
+        robot's, and the live monitor does not judge that start either.
+
+    Returns
+    -------
+    threshold : Threshold
+        Fitted.
+    settings : ObserverSettings
+        The settings used (save them with the threshold: :func:`save_tuned`).
+    """
+    if method not in METHOD_NAMES:
+        raise UnknownNameError(
+            f"unknown threshold method {method!r}; options: {sorted(METHOD_NAMES)}"
+        )
+    if not logs:
+        raise InputValueError("tune needs at least one collision-free log")
+    settings = settings or ObserverSettings(kind=METHOD_NAMES[method])
+    needed = METHOD_NAMES[method]
+    if (needed == "acceleration") != (settings.kind == "acceleration"):
+        raise InputValueError(
+            f"method {method!r} watches the {needed!r} residual; observer kind is {settings.kind!r}"
+        )
+    signals = [settings.observe(log, robot) for log in logs]
+    options.setdefault("transient", settings.settle_time(signals[0].dt))
+    return make_threshold(method, robot, **options).fit(signals), settings
+
+
+def save_tuned(path: str | Path, threshold: Threshold, settings: ObserverSettings) -> Path:
+    """Write a fitted threshold and its observer settings to one readable YAML file."""
+    data = threshold.to_dict()
+    data["observer"] = settings.to_dict()
+    out = Path(path)
+    out.write_text(
+        "# sensorless fitted collision threshold (edit with care)\n"
+        + yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100),
+        encoding="utf-8",
+    )
+    return out
+
+
+def load_tuned(path: str | Path) -> tuple[Threshold, ObserverSettings]:
+    """Read a file written by :func:`save_tuned` (or a bare threshold file: default settings)."""
+    data = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+    if not isinstance(data, dict):
+        raise InputValueError(f"{path} is not a threshold file (expected a YAML mapping)")
+    settings_data = data.pop("observer", None)
+    threshold = Threshold.from_dict(data)
+    if settings_data is None:
+        settings = ObserverSettings(kind=threshold.kind_, gain=float(threshold.gain_[0]))
+    else:
+        settings = ObserverSettings.from_dict(settings_data)
+    return threshold, settings

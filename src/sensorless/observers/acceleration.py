@@ -1,0 +1,227 @@
+"""The acceleration-based estimate τ̂_c of eq. (3.8)/(3.16).
+
+Units SI and radians; time series have shape ``(n_samples, n_dof)`` with time
+along axis 0; one sample has shape ``(n_dof,)``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import ArrayLike
+
+from .._validation import FloatArray
+from ..exceptions import DimensionError, InputTypeError
+from ..filters import CausalEstimator, FilterState
+from ..robots.model import RobotModel
+from ..signals import ObserverSignals
+from ._common import (
+    ObserverSample,
+    _check_sample_finite,
+    _check_time,
+    _friction_name,
+    _NominalObserver,
+    _one_sample,
+    _sample,
+    _series,
+)
+
+__all__ = ["AccelerationObserver"]
+
+
+class AccelerationObserver(_NominalObserver):
+    """Acceleration-based estimate τ̂_c of eq. (3.8)/(3.16) with a causal filter F.
+
+        τ̂_c = M(q) q̂̈ + C(q, q̂̇) q̂̇ + g(q) − τ + τ̂_fr(q̂̇)
+
+    with q̂̇ and q̂̈ estimated from the measured q by ``estimator`` and the rigid-body
+    terms evaluated at the measured q (RNEA, eq. 3.16 with the nominal
+    parameters). Unlike :class:`MomentumObserver`, the torque used at sample k
+    is τ[k] itself (no hold shift): the estimate is an algebraic function of
+    the sample. The filter delays q̂̇ and q̂̈ (``estimator.delays``), and so
+    τ̂_c: a causal filter always lags and low-passes (thesis § 3.4.1).
+
+    Parameters
+    ----------
+    robot : RobotModel
+        Nominal model (link-side model with ``torque="joint"``, as in
+        :class:`MomentumObserver`).
+    estimator : CausalEstimator
+        Velocity and acceleration estimator of :mod:`sensorless.filters`
+        (e.g. ``Butterworth(dt, cutoff=20.0)``, 5th order as in the thesis);
+        its ``dt`` is the observer's sample period.
+    friction : "model", None, FrictionModel or LuGre
+        Nominal friction, as in :class:`MomentumObserver`.
+    torque : {"motor", "joint"}
+        Motor torques τ_m or joint-torque-sensor torques τ_J (τ_L of eq. 3.8).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sensorless import robots
+    >>> from sensorless.filters import FiniteDifference
+    >>> robot = robots.load("planar2")
+    >>> observer = AccelerationObserver(robot, FiniteDifference(1e-3), friction=None)
+    >>> q = np.zeros((3, 2))
+    >>> tau = np.tile(robot.gravity(q[0]), (3, 1))
+    >>> signals, state = observer.run(np.arange(3) * 1e-3, q, tau)
+    >>> bool(np.allclose(signals.residual, 0.0))
+    True
+    """
+
+    def __init__(
+        self,
+        robot: RobotModel,
+        estimator: CausalEstimator,
+        friction: Any = "model",
+        torque: str = "motor",
+    ) -> None:
+        super().__init__(robot, friction, torque)
+        if not isinstance(estimator, CausalEstimator):
+            raise InputTypeError(
+                "estimator must be a causal estimator of sensorless.filters (FiniteDifference, "
+                f"DirtyDerivative, Butterworth); got {type(estimator).__name__}"
+            )
+        self._estimator = estimator
+
+    @property
+    def estimator(self) -> CausalEstimator:
+        """Velocity and acceleration estimator."""
+        return self._estimator
+
+    @property
+    def dt(self) -> float:
+        """Sample period of the estimator [s]."""
+        return self.estimator.dt
+
+    def __repr__(self) -> str:
+        return (
+            f"AccelerationObserver(robot={self.robot.name!r}, estimator={self.estimator!r}, "
+            f"friction={_friction_name(self.friction_model)}, torque={self.torque!r})"
+        )
+
+    def settings(self) -> dict[str, Any]:
+        """The observer's settings as plain data (for metadata)."""
+        return {
+            "observer": "acceleration",
+            "torque": self.torque,
+            "estimator": repr(self.estimator),
+            "delays": list(self.estimator.delays),
+            "dt": self.dt,
+            "friction": _friction_name(self.friction_model),
+            "robot": self.robot.name,
+        }
+
+    def _estimate(
+        self, q: FloatArray, qd: FloatArray, qdd: FloatArray, tau: FloatArray
+    ) -> ObserverSample:
+        """τ̂_c, M q̈ + C q̇ + g, τ̂_fr and sign(q̇) for arrays of shape (n_samples, n_dof)."""
+        model, data = self._pin_model, self._pin_data
+        rigid = np.empty_like(q)
+        for k in range(q.shape[0]):
+            rigid[k] = pin.rnea(model, data, q[k], qd[k], qdd[k])
+        friction = self._friction(qd)
+        return ObserverSample(rigid - tau + friction, rigid, friction, np.sign(qd))
+
+    def initial_state(self, q0: ArrayLike) -> FilterState:
+        """Filter state of a robot at rest at ``q0`` [rad], shape (n_dof,)."""
+        return self.estimator.initial_state(_one_sample(q0, self.n_dof, "q0")[0])
+
+    def _check_state(self, state: Any) -> FilterState:
+        if not isinstance(state, FilterState):
+            raise InputTypeError(
+                "state must be a FilterState from initial_state, step or run; "
+                f"got {type(state).__name__}"
+            )
+        if state.n_dof != self.n_dof:
+            raise DimensionError(
+                f"state is for {state.n_dof} joints; the observer's robot has {self.n_dof}"
+            )
+        return state
+
+    def step(
+        self, state: FilterState, q: ArrayLike, tau: ArrayLike
+    ) -> tuple[ObserverSample, FilterState]:
+        """Process one sample.
+
+        Parameters
+        ----------
+        state : FilterState
+            Estimator state after the previous sample (or :meth:`initial_state`).
+        q : array-like of shape (n_dof,)
+            Measured joint positions [rad].
+        tau : array-like of shape (n_dof,)
+            Torque of this sample [N m], used at this sample.
+
+        Returns
+        -------
+        sample : ObserverSample
+            τ̂_c, M q̂̈ + C q̂̇ + g, τ̂_fr(q̂̇) and sign(q̂̇), each of shape (n_dof,).
+        state : FilterState
+        """
+        n = self.n_dof
+        state = self._check_state(state)
+        q_arr = _sample(q, n, "q")
+        tau_arr = _sample(tau, n, "tau")
+        _check_sample_finite(q=q_arr, tau=tau_arr)
+        y, new_state = self.estimator.step(q_arr, state)
+        out = self._estimate(q_arr[None], y.velocity[None], y.acceleration[None], tau_arr[None])
+        return ObserverSample(*(x[0] for x in out)), new_state
+
+    def run(
+        self, t: ArrayLike, q: ArrayLike, tau: ArrayLike, state: FilterState | None = None
+    ) -> tuple[ObserverSignals, FilterState]:
+        """Process whole arrays; equal to :meth:`step` sample by sample.
+
+        Parameters
+        ----------
+        t : array-like of shape (n_samples,)
+            Time [s], spaced by the estimator's ``dt``.
+        q : array-like of shape (n_samples, n_dof)
+            Measured joint positions [rad].
+        tau : array-like of shape (n_samples, n_dof)
+            Torques [N m] (τ_m or τ_J).
+        state : FilterState, optional
+            Estimator state before ``q[0]``; by default at rest at ``q[0]``.
+
+        Returns
+        -------
+        signals : ObserverSignals
+            ``kind="acceleration"``, ``residual`` τ̂_c, ``model_torque``
+            M q̂̈ + C q̂̇ + g, ``friction`` τ̂_fr(q̂̇), ``sign`` sign(q̂̇),
+            ``velocity`` q̂̇, ``acceleration`` q̂̈, ``position`` q. ``gain`` is NaN:
+            this estimate has no K_I.
+        state : FilterState
+            Estimator state after the last sample.
+        """
+        n = self.n_dof
+        if state is not None:
+            state = self._check_state(state)
+        q_arr = _series(q, n, "q")
+        n_samples = q_arr.shape[0]
+        tau_arr = _series(tau, n, "tau", n_samples)
+        t_arr = _check_time(t, n_samples, self.dt)
+        if state is None and n_samples == 0:
+            raise DimensionError(
+                "q has no samples; pass a state to process an empty chunk, or at least one "
+                "sample to start at rest at q[0]"
+            )
+        y, new_state = self.estimator.filter(q_arr, state)
+        out = self._estimate(q_arr, y.velocity, y.acceleration, tau_arr)
+        signals = ObserverSignals(
+            t=t_arr,
+            residual=out.residual,
+            model_torque=out.model_torque,
+            friction=out.friction,
+            sign=out.sign,
+            velocity=y.velocity,
+            gain=np.full(n, np.nan),
+            kind="acceleration",
+            robot=self.robot.name,
+            position=q_arr,
+            acceleration=y.acceleration,
+            metadata=self.settings(),
+        )
+        return signals, new_state

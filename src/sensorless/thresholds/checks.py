@@ -1,0 +1,224 @@
+"""Input checks of the threshold families and of the detector.
+
+Hyper-parameters are checked when ``fit`` reads them, signals when a public
+entry point receives them: ``fit``, ``bounds``, ``initial_state``, ``step``
+and ``process`` of a threshold, ``run``, ``detect`` and ``step`` of a
+:class:`~sensorless.detection.Detector`. Past those entry points, functions
+take checked arrays and check nothing again.
+"""
+
+from __future__ import annotations
+
+import operator
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .._validation import FloatArray, as_joint_array, check_finite, check_increasing
+from ..exceptions import DimensionError, InputTypeError, InputValueError
+from ..signals import ObserverSignals
+from .state import ThresholdInputs, ThresholdState
+
+__all__ = [
+    "as_inputs",
+    "as_runs",
+    "as_samples",
+    "check_bound",
+    "check_inputs_finite",
+    "check_joints",
+    "check_runs",
+    "check_seconds",
+    "check_state",
+    "regular_period",
+]
+
+SERIES = ("model_torque", "friction", "sign", "velocity")
+"""Signals every family receives besides the residual (the first fields of ThresholdInputs)."""
+
+
+# --------------------------------------------------------------------------- hyper-parameters
+
+
+def check_bound(value: Any, n_dof: int, name: str) -> FloatArray:
+    """A torque bound [N m] per joint (``margin``, ``disturbance``): scalar or (n_dof,), >= 0."""
+    try:
+        bound = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputValueError(
+            f"{name} must be a number or a sequence of {n_dof} numbers [N m]; got {value!r}"
+        ) from None
+    if bound.ndim == 0:
+        bound = np.full(n_dof, float(bound))
+    elif bound.shape != (n_dof,):
+        raise DimensionError(
+            f"{name} must be a scalar or have shape ({n_dof},) for {n_dof} joints; "
+            f"got shape {bound.shape}"
+        )
+    if not np.all(np.isfinite(bound)) or np.any(bound < 0.0):
+        raise InputValueError(f"{name} must be finite and >= 0 [N m]; got {value!r}")
+    return bound
+
+
+def check_joints(joints: Any, n_dof: int) -> tuple[int, ...]:
+    """Return the monitored joints (1-based, sorted) after checking them; None means all."""
+    if joints is None:
+        return tuple(range(1, n_dof + 1))
+    message = (
+        f"joints must be distinct joint numbers between 1 and {n_dof} (1-based), "
+        f"or None for all; got {joints!r}"
+    )
+    try:
+        values = [operator.index(j) for j in joints]
+    except TypeError:
+        raise InputValueError(message) from None
+    if not values or len(set(values)) != len(values) or not all(1 <= j <= n_dof for j in values):
+        raise InputValueError(message)
+    return tuple(sorted(values))
+
+
+def check_seconds(value: Any, name: str) -> float:
+    """Return a non-negative, finite duration [s]."""
+    try:
+        seconds = float(value)
+    except (TypeError, ValueError):
+        raise InputValueError(f"{name} must be a number of seconds >= 0; got {value!r}") from None
+    if not np.isfinite(seconds) or seconds < 0.0:
+        raise InputValueError(f"{name} must be a finite number of seconds >= 0; got {value!r}")
+    return seconds
+
+
+# --------------------------------------------------------------------------- runs
+
+
+def regular_period(t: FloatArray, what: str, rtol: float = 1e-6) -> float:
+    """Sample period [s] of regular time stamps; irregular ones are an error, never resampled."""
+    if t.shape[0] < 2:
+        raise InputValueError(
+            f"{what} has {t.shape[0]} sample(s); at least 2 are needed to know the sample period"
+        )
+    step = np.diff(t)
+    median = float(np.median(step))
+    tolerance = rtol * median + 4.0 * float(np.spacing(max(abs(t[0]), abs(t[-1]))))
+    bad = np.flatnonzero(np.abs(step - median) > tolerance)
+    if bad.size:
+        k = int(bad[0])
+        raise InputValueError(
+            f"t of {what} is not regularly sampled: t[{k + 1}] - t[{k}] = {step[k]:.9g} s, "
+            f"the median step is {median:.9g} s (rtol {rtol:g}); resample the log explicitly "
+            "with sensorless.io.resample"
+        )
+    return median
+
+
+def as_runs(signals: Any) -> list[ObserverSignals]:
+    """The fit runs: one ObserverSignals or a non-empty sequence of them."""
+    runs = [signals] if isinstance(signals, ObserverSignals) else signals
+    if not isinstance(runs, Sequence) or not all(isinstance(r, ObserverSignals) for r in runs):
+        raise InputTypeError(
+            "fit takes an ObserverSignals or a sequence of ObserverSignals (collision-free "
+            f"runs); got {type(signals).__name__}"
+        )
+    if not runs:
+        raise InputValueError("fit needs at least one collision-free run; got an empty sequence")
+    return list(runs)
+
+
+def check_runs(runs: list[ObserverSignals]) -> None:
+    """Fit runs of one robot, signal kind and gain, with increasing time and finite signals."""
+    first = runs[0]
+    for i, run in enumerate(runs):
+        what = f"fit run {i}"
+        if run.n_dof != first.n_dof or run.robot != first.robot:
+            raise DimensionError(
+                f"all fit runs must come from one robot; run 0 is {first.robot!r} "
+                f"({first.n_dof} joints), {what} is {run.robot!r} ({run.n_dof} joints)"
+            )
+        if run.kind != first.kind:
+            raise InputValueError(
+                f"all fit runs must be of one signal kind; run 0 is {first.kind!r}, "
+                f"{what} is {run.kind!r}"
+            )
+        if not np.allclose(run.gain, first.gain, rtol=1e-9, atol=0.0, equal_nan=True):
+            raise InputValueError(
+                f"all fit runs must use one observer gain K_I; run 0 has {first.gain.tolist()}, "
+                f"{what} has {run.gain.tolist()} [1/s]"
+            )
+        check_increasing(run.t, what)
+        for name in ("residual", *SERIES):
+            check_finite(getattr(run, name), f"{name} of {what}")
+
+
+# --------------------------------------------------------------------------- samples
+
+
+def as_samples(
+    value: ArrayLike, n_dof: int, name: str, *, one_sample: str = "", allow_nonfinite: bool = False
+) -> FloatArray:
+    """``value`` as an array of shape (n_samples, n_dof).
+
+    ``one_sample`` names the method (``"step"``) that takes exactly one
+    sample of shape (n_dof,); ``allow_nonfinite`` skips the NaN/inf check
+    (the detector reports such samples as faults instead).
+    """
+    arr, single = as_joint_array(value, n_dof, name, allow_nonfinite=allow_nonfinite)
+    if one_sample and not single:
+        raise DimensionError(
+            f"{one_sample} takes one sample: {name} of shape ({n_dof},); got shape "
+            f"{np.shape(value)}"
+        )
+    return arr
+
+
+def as_inputs(
+    n_dof: int,
+    model_torque: ArrayLike,
+    friction: ArrayLike,
+    sign: ArrayLike,
+    velocity: ArrayLike,
+    position: ArrayLike | None,
+    acceleration: ArrayLike | None,
+    *,
+    one_sample: str = "",
+    allow_nonfinite: bool = False,
+) -> ThresholdInputs:
+    """Checked :class:`ThresholdInputs` of a stream; every series has the samples of the first.
+
+    ``one_sample`` and ``allow_nonfinite`` as for :func:`as_samples`.
+    """
+    counts: list[int] = []
+
+    def convert(value: ArrayLike, name: str) -> FloatArray:
+        arr = as_samples(
+            value, n_dof, name, one_sample=one_sample, allow_nonfinite=allow_nonfinite
+        )
+        if counts and arr.shape[0] != counts[0]:
+            raise DimensionError(f"{name} has {arr.shape[0]} samples; model_torque has {counts[0]}")
+        counts.append(arr.shape[0])
+        return arr
+
+    return ThresholdInputs(
+        convert(model_torque, "model_torque"),
+        convert(friction, "friction"),
+        convert(sign, "sign"),
+        convert(velocity, "velocity"),
+        None if position is None else convert(position, "position"),
+        None if acceleration is None else convert(acceleration, "acceleration"),
+    )
+
+
+def check_inputs_finite(inputs: ThresholdInputs) -> None:
+    """Raise :class:`~sensorless.exceptions.InputValueError` naming the first non-finite input."""
+    for name, values in zip(ThresholdInputs._fields, inputs, strict=True):
+        if values is not None:
+            check_finite(values, name)
+
+
+def check_state(state: Any, expected: type[ThresholdState] = ThresholdState) -> None:
+    """Raise :class:`~sensorless.exceptions.InputTypeError` unless ``state`` is an ``expected``."""
+    if not isinstance(state, expected):
+        raise InputTypeError(
+            f"state must be a {expected.__name__} from initial_state, step or process; "
+            f"got {type(state).__name__}"
+        )

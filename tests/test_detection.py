@@ -120,13 +120,13 @@ def test_planted_step_is_detected_with_its_start_and_end(method: str) -> None:
     assert all(e.method == method for e in events)
 
 
-def test_threshold_detect_is_the_detector_shortcut() -> None:
+def test_thresholds_give_bounds_and_the_detector_gives_events() -> None:
     signals = run(12, 600, [(100, 130, 1, 5.0), (140, 150, 2, 5.0)])
     for threshold in FAMILIES.values():
-        assert threshold.detect(signals, hold=0.02) == Detector(threshold, hold=0.02).detect(
-            signals
-        )
-    assert len(FAMILIES["constant"].detect(signals, hold=0.02)) == 1
+        assert not hasattr(threshold, "detect")  # events are the detector's business
+        events = Detector(threshold, hold=0.02).detect(signals)
+        assert [(e.start, e.end, e.joints) for e in events] == [(100 * DT, 150 * DT, (1, 2))]
+    assert len(Detector(FAMILIES["constant"], hold=0.02).detect(signals)) == 1
 
 
 def test_hold_merges_and_min_duration_drops() -> None:

@@ -489,6 +489,9 @@ def test_stream_input_errors() -> None:
         th.step("state", *rows)  # type: ignore[arg-type]
     with pytest.raises(InputValueError, match="must be finite"):
         th.step(state, rows[0], rows[1], rows[2], np.full(N_DOF, np.nan))
+    assert th.initial_state(*rows, kind="motor").dt == state.dt
+    with pytest.raises(InputValueError, match="fitted on 'motor' signals; these signals are"):
+        th.initial_state(*rows, kind="joint")
 
 
 def test_minimax_fit_gives_the_narrowest_band() -> None:

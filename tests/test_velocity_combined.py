@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 import yaml
 
+from sensorless.detection import Detector
 from sensorless.exceptions import DimensionError, InputTypeError, InputValueError, NotFittedError
 from sensorless.signals import ObserverSignals
 from sensorless.thresholds import (
@@ -323,7 +324,7 @@ def test_the_stream_kind_selects_the_residual() -> None:
 
 def test_detect_uses_the_residual_of_the_signals() -> None:
     th, pairs = noisy_fit()
-    assert th.detect(pairs[0][1]) == []
+    assert Detector(th.for_kind(pairs[0][1].kind)).detect(pairs[0][1]) == []
     _, joint = pair(3, noise_motor=0.02, noise_joint=0.03)
     bumped = joint.residual.copy()
     bumped[1000:1100, 1] += 2.0
@@ -338,9 +339,25 @@ def test_detect_uses_the_residual_of_the_signals() -> None:
         kind="joint",
         robot="synthetic",
     )
-    events = th.detect(hit)
+    events = Detector(th.for_kind(hit.kind)).detect(hit)
     assert len(events) == 1 and events[0].joints == (2,)
     assert events[0].start == pytest.approx(1.0)
+
+
+def test_the_detector_takes_the_threshold_of_one_residual() -> None:
+    th, pairs = noisy_fit()
+    motor = pairs[0][0]
+    result = Detector(th.for_kind("motor")).run(motor)
+    np.testing.assert_array_equal(result.lower, th.bounds(motor)[0])
+    np.testing.assert_array_equal(result.upper, th.bounds(motor)[1])
+    assert result.method == "velocity"
+    hint = r"got kind None; pass kind='motor' or kind='joint', or stream for_kind\(kind\)"
+    with pytest.raises(InputValueError, match=hint):
+        Detector(th).run(motor)
+    detector = Detector(th)
+    first = [getattr(motor, name)[0] for name in ROWS]
+    with pytest.raises(InputValueError, match=hint):
+        detector.step(detector.initial_state(), motor.residual[0], *first, motor.t[0])
 
 
 # --------------------------------------------------------------------------- files
@@ -390,7 +407,7 @@ def test_unfitted_threshold_raises(tmp_path: Path) -> None:
     with pytest.raises(NotFittedError, match="call fit"):
         th.for_kind("motor")
     with pytest.raises(NotFittedError, match="call fit"):
-        th.detect(motor)
+        Detector(th.for_kind(motor.kind)).detect(motor)
     with pytest.raises(NotFittedError, match="call fit"):
         th.save(tmp_path / "x.yaml")
 
@@ -493,7 +510,7 @@ def test_signals_and_states_of_another_kind_are_rejected() -> None:
     ):
         th.bounds(acceleration)
     with pytest.raises(InputValueError, match="got kind 'acceleration'"):
-        th.detect(acceleration)
+        Detector(th.for_kind(acceleration.kind)).detect(acceleration)
     with pytest.raises(InputTypeError, match="signals must be an ObserverSignals"):
         th.bounds(motor.residual)  # type: ignore[arg-type]
     with pytest.raises(InputValueError, match=r"fitted for synthetic.*come from puma"):

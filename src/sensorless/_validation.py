@@ -22,6 +22,7 @@ __all__ = [
     "FloatArray",
     "as_float_array",
     "as_joint_array",
+    "as_sample",
     "check_dt",
     "check_finite",
     "check_increasing",
@@ -39,7 +40,8 @@ def check_finite(x: FloatArray, name: str) -> None:
     finite = np.isfinite(x)
     if not finite.all():
         bad = np.argwhere(~finite)[0]
-        where = f"sample {bad[0]}, joint {bad[1]}" if bad.size == 2 else f"index {tuple(bad)}"
+        index = tuple(int(i) for i in bad)
+        where = f"sample {index[0]}, joint {index[1]}" if len(index) == 2 else f"index {index}"
         raise InputValueError(f"{name} must be finite; found {x[tuple(bad)]} at {where}")
 
 
@@ -188,7 +190,8 @@ def per_joint(value: Any, n_dof: int, name: str, unit: str, sign: Sign = "any") 
             f"got shape {arr.shape}"
         )
     if not np.isfinite(arr).all() or not _sign_ok(arr, sign):
-        raise InputValueError(f"{name} must be finite{_SIGN_TEXT[sign]} [{unit}]; got {value!r}")
+        wanted = f"finite and{_SIGN_TEXT[sign]}" if sign != "any" else "finite"
+        raise InputValueError(f"{name} must be {wanted} [{unit}]; got {value!r}")
     return arr
 
 
@@ -202,3 +205,21 @@ def check_increasing(t: FloatArray, what: str) -> None:
             f"t of {what} must be strictly increasing; t[{k}] = {t[k]!r} s follows "
             f"t[{k - 1}] = {t[k - 1]!r} s"
         )
+
+
+def as_sample(x: Any, n_dof: int, name: str) -> tuple[FloatArray, str]:
+    """One sample of shape ``(n_dof,)`` as a C-contiguous float array, for streams.
+
+    Never raises on data: returns ``(array, "")``, or an empty array and the
+    reason (not numeric, wrong shape). Finiteness and limits are the caller's.
+    """
+    try:
+        arr = np.ascontiguousarray(x, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError):
+        return _EMPTY, f"{name} must be numeric; got {x!r}"
+    if arr.shape != (n_dof,):
+        return _EMPTY, f"{name} must have shape ({n_dof},); got {arr.shape}"
+    return arr, ""
+
+
+_EMPTY = np.empty(0)

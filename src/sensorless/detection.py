@@ -53,16 +53,12 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
-from ._validation import FloatArray, as_joint_array, check_dt
-from .exceptions import DimensionError, InputTypeError, InputValueError
+from ._validation import FloatArray, check_dt
+from .exceptions import InputTypeError, InputValueError
 from .signals import Event, ObserverSignals
-from .thresholds.base import (
-    Threshold,
-    ThresholdInputs,
-    ThresholdState,
-    check_joints,
-    check_seconds,
-)
+from .thresholds.base import Threshold
+from .thresholds.checks import as_inputs, as_samples, check_joints, check_seconds
+from .thresholds.state import ThresholdInputs, ThresholdState
 
 __all__ = [
     "DetectionResult",
@@ -73,7 +69,7 @@ __all__ = [
 ]
 
 BoolArray = NDArray[np.bool_]
-Status = Literal["ok", "collision", "fault"]
+Status = Literal["ok", "collision", "fault", "settling"]
 
 _EVENT_COLUMNS = ["start", "end", "duration", "joints", "peak", "peak_residual", "method"]
 _STREAM_INPUTS = ("residual", "model_torque", "friction", "sign", "velocity")
@@ -106,10 +102,12 @@ class Verdict:
 
     Attributes
     ----------
-    status : {"ok", "collision", "fault"}
+    status : {"ok", "collision", "fault", "settling"}
         ``"collision"``: the sample is outside its bounds and the event it
         belongs to has lasted at least ``min_duration``; ``"fault"``: the
-        sample was skipped (non-finite input or time not increasing).
+        sample was skipped (non-finite input or time not increasing);
+        ``"settling"``: a monitor's observer has just (re)started and the
+        sample is not judged (never given by :meth:`Detector.step`).
     t : float
         Time of the sample [s].
     joints : tuple of int
@@ -231,7 +229,9 @@ class Detector:
     Parameters
     ----------
     threshold : Threshold
-        A fitted threshold (any family).
+        A fitted threshold of one residual (any family; for a
+        :class:`~sensorless.thresholds.CombinedVelocityThreshold`, its
+        ``for_kind(kind)``).
     joints : sequence of int, optional
         Joints to monitor (1-based); by default those of the threshold.
     min_duration : float
@@ -283,9 +283,11 @@ class Detector:
             method=self.threshold.name,
         )
 
-    def _group(self, t: FloatArray, excursion: FloatArray, residual: FloatArray) -> list[Event]:
-        """Events of accepted samples; ``excursion`` and ``residual`` of monitored joints."""
-        joints = np.asarray(self.monitored_joints)
+    def _group(
+        self, t: FloatArray, excursion: FloatArray, residual: FloatArray, monitored: tuple[int, ...]
+    ) -> list[Event]:
+        """Events of accepted samples; ``excursion`` and ``residual`` of ``monitored`` joints."""
+        joints = np.asarray(monitored)
         outside = excursion > 0.0
         rows = np.flatnonzero(outside.any(axis=1))
         if rows.size == 0:
@@ -336,44 +338,31 @@ class Detector:
         """
         threshold = self.threshold
         threshold.check_signals(signals)
+        joints = self.monitored_joints
+        cols = np.asarray(joints) - 1
         valid = _valid_samples(signals)
         if not skip_nonfinite and not valid.all():
             raise InputValueError(_describe_invalid(signals, valid))
-        cols = np.asarray(self.monitored_joints) - 1
         shape = signals.residual.shape
         lower = np.full(shape, np.nan)
         upper = np.full(shape, np.nan)
         rows = np.flatnonzero(valid)
         dt = threshold.dt_
         if valid.all() and rows.size:
-            dt = threshold.sample_period(signals)
+            # valid samples have finite, increasing time: only the family's own rule is left
+            dt = threshold._period(signals.t, "signals")
         elif rows.size > 1:
             dt = float(np.median(np.diff(signals.t[rows])))
         if rows.size:
-            h, f, sg, v = (
-                getattr(signals, name)[rows]
-                for name in ("model_torque", "friction", "sign", "velocity")
-            )
-            q, qdd = (
-                None if getattr(signals, name) is None else getattr(signals, name)[rows]
-                for name in ("position", "acceleration")
-            )
-            state = threshold.initial_state(
-                h[0],
-                f[0],
-                sg[0],
-                v[0],
-                position=None if q is None else q[0],
-                acceleration=None if qdd is None else qdd[0],
-                dt=dt,
-            )
-            lower[rows], upper[rows], _ = threshold.process(
-                state, h, f, sg, v, position=q, acceleration=qdd
-            )
+            # From here on the same path as the stream: no kind, as step has none.
+            inputs = ThresholdInputs.from_signals(signals, rows)
+            lower[rows], upper[rows] = threshold._bounds_checked(inputs, dt, None)
         excursion = _excursion(signals.residual, lower, upper)[:, cols]
         outside = np.zeros(shape, dtype=bool)
         outside[:, cols] = excursion > 0.0
-        events = self._group(signals.t[valid], excursion[valid], signals.residual[valid][:, cols])
+        events = self._group(
+            signals.t[valid], excursion[valid], signals.residual[valid][:, cols], joints
+        )
         return DetectionResult(
             t=signals.t,
             residual=signals.residual,
@@ -383,7 +372,7 @@ class Detector:
             valid=valid,
             events=events,
             method=threshold.name,
-            joints=self.monitored_joints,
+            joints=joints,
             dt=dt,
         )
 
@@ -452,26 +441,25 @@ class Detector:
                 f"got {type(state).__name__}"
             )
         n_dof = self.threshold.n_dof_
-        r = _one_sample(residual, n_dof, "residual")
-        named = {
-            "model_torque": model_torque,
-            "friction": friction,
-            "sign": sign,
-            "velocity": velocity,
-            "position": position,
-            "acceleration": acceleration,
-        }
-        inputs: dict[str, FloatArray | None] = {
-            k: None if v is None else _one_sample(v, n_dof, k) for k, v in named.items()
-        }
+        # Non-finite values are data faults, reported in the verdict; shapes are errors.
+        r = as_samples(residual, n_dof, "residual", one_sample="step", allow_nonfinite=True)[0]
+        inputs = as_inputs(
+            n_dof,
+            model_torque,
+            friction,
+            sign,
+            velocity,
+            position,
+            acceleration,
+            one_sample="step",
+            allow_nonfinite=True,
+        )
         time = _as_time(t)
-        fault = _fault({"residual": r, **inputs}, time, state.t)
+        fault = _fault(r, inputs, time, state.t)
         if fault:
             nan = np.full(n_dof, np.nan)
             return Verdict("fault", time, (), r, nan, nan.copy(), None, fault), state
-
-        rows = {k: None if v is None else v[None] for k, v in inputs.items()}
-        return self._step_checked(state, r, ThresholdInputs(**rows), time)  # type: ignore[arg-type]
+        return self._step_checked(state, r, inputs, time)
 
     def _step_checked(
         self, state: DetectorState, r: FloatArray, inputs: ThresholdInputs, time: float
@@ -483,15 +471,7 @@ class Detector:
         """
         threshold_state = state.threshold
         if threshold_state is None:
-            threshold_state = self.threshold.initial_state(
-                inputs.model_torque,
-                inputs.friction,
-                inputs.sign,
-                inputs.velocity,
-                position=inputs.position,
-                acceleration=inputs.acceleration,
-                dt=state.dt,
-            )
+            threshold_state = self.threshold._initial_state_checked(inputs, state.dt)
         lower, upper, threshold_state = self.threshold._step_checked(threshold_state, inputs)
         cols = np.asarray(self.monitored_joints) - 1
         excursion = _excursion(r, lower, upper)[cols]
@@ -563,15 +543,6 @@ def _describe_invalid(signals: ObserverSignals, valid: BoolArray) -> str:
     )
 
 
-def _one_sample(value: ArrayLike, n_dof: int, name: str) -> FloatArray:
-    arr, single = as_joint_array(value, n_dof, name, allow_nonfinite=True)
-    if not single:
-        raise DimensionError(
-            f"step takes one sample: {name} of shape ({n_dof},); got shape {np.shape(value)}"
-        )
-    return arr[0]
-
-
 def _as_time(t: Any) -> float:
     try:
         return float(t)
@@ -579,14 +550,15 @@ def _as_time(t: Any) -> float:
         return math.nan
 
 
-def _fault(rows: dict[str, FloatArray | None], t: float, last: float) -> str:
-    """Why a sample must be skipped, or "" if it is fine."""
+def _fault(residual: FloatArray, inputs: ThresholdInputs, t: float, last: float) -> str:
+    """Why a sample (``residual`` of shape (n_dof,), ``inputs`` of one row) must be skipped."""
     if not math.isfinite(t):
         return f"time t = {t} is not finite"
-    for name, row in rows.items():
+    rows = zip(("residual", *ThresholdInputs._fields), (residual[None], *inputs), strict=True)
+    for name, row in rows:
         if row is not None and not np.isfinite(row).all():
-            j = int(np.flatnonzero(~np.isfinite(row))[0])
-            return f"{name} is {row[j]} at joint {j + 1}"
+            j = int(np.flatnonzero(~np.isfinite(row[0]))[0])
+            return f"{name} is {row[0, j]} at joint {j + 1}"
     if t <= last:
         return f"time t = {t!r} s does not increase past the last accepted sample ({last!r} s)"
     return ""

@@ -21,8 +21,11 @@ from .._validation import (
     check_scalar,
 )
 from ..exceptions import DimensionError, InputValueError
+from ..trajectories.sweeps import sweep_velocities
 
 __all__ = ["steady_state_map", "sweep_velocities"]
+
+# The experiment's velocities belong to the trajectory that makes them; re-exported here.
 
 
 def _series(x: ArrayLike, name: str) -> FloatArray:
@@ -71,44 +74,6 @@ def uniform_period(t: FloatArray) -> float:
             f"{steps.min():.6g} to {steps.max():.6g} s (resample the log explicitly)"
         )
     return dt
-
-
-def _grid(lo: float, hi: float, step: float) -> FloatArray:
-    if not (np.isfinite([lo, hi, step]).all() and step > 0.0 and hi >= lo):
-        raise InputValueError(
-            f"a sweep must be (low, high, step) with low <= high and step > 0; got {(lo, hi, step)}"
-        )
-    n = int(np.floor((hi - lo) / step + 1e-9))
-    # Rounding removes the float noise of lo + k*step so that both sweeps share values.
-    return np.round(lo + step * np.arange(n + 1), 12)
-
-
-def sweep_velocities(
-    fast: tuple[float, float, float] = (-2.0, 2.0, 0.16),
-    slow: tuple[float, float, float] = (-0.11, 0.11, 0.01),
-) -> FloatArray:
-    """Constant velocities of the friction experiments, thesis §2.4.1.
-
-    Parameters
-    ----------
-    fast : tuple (low, high, step), default (-2, 2, 0.16)
-        Wide sweep [rad/s].
-    slow : tuple (low, high, step), default (-0.11, 0.11, 0.01)
-        Slow sweep [rad/s].
-
-    Returns
-    -------
-    velocities : ndarray of shape (n_velocities,)
-        Sorted, unique velocities of both sweeps [rad/s]; zero is excluded.
-
-    Examples
-    --------
-    >>> v = sweep_velocities()
-    >>> v.size, float(v[0]), float(v[-1]), bool((v != 0).all())
-    (46, -2.0, 2.0, True)
-    """
-    values = np.unique(np.concatenate([_grid(*fast), _grid(*slow)]))
-    return values[values != 0.0]
 
 
 def _plateaus(qd: FloatArray, tolerance: float) -> list[tuple[int, int]]:

@@ -144,14 +144,17 @@ def _segment(
     """
     block = slice(start, stop)
     estimator = monitor.estimator
-    derivatives, _ = estimator.filter(q[block], estimator.initial_state(q[start]))
+    initial = estimator.initial_state(q[start])
+    derivatives, _ = estimator._run(q[block], initial)
     velocity, acceleration = derivatives.velocity, derivatives.acceleration
     observer: Any = monitor._observer
     if monitor.settings.kind == "acceleration":
-        signals, _ = observer.run(t[block], q[block], tau[block])
+        signals, _ = observer._run_checked(t[block], q[block], tau[block], initial)
     else:
-        state = observer.initial_state(q[start], np.zeros(q.shape[1]))
-        signals, _ = observer.run(t[block], q[block], velocity, tau[block], state)
+        state = observer._initial_state_checked(q[start : start + 1], np.zeros((1, q.shape[1])))
+        signals, _ = observer._run_checked(
+            t[block], q[block], np.ascontiguousarray(velocity), tau[block], state
+        )
     finite = np.isfinite(
         np.stack([signals.residual, signals.model_torque, signals.friction, signals.sign])
     ).all(axis=(0, 2))

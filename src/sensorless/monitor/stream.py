@@ -16,7 +16,7 @@ from typing import Any, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validation import FloatArray, check_dt
+from .._validation import FloatArray, as_sample, check_dt
 from ..detection import Detector, DetectorState, Verdict
 from ..exceptions import DimensionError, InputTypeError, InputValueError
 from ..io import Log
@@ -246,21 +246,20 @@ class CollisionMonitor:
         joint = self.settings.kind == "joint"
         if joint and tau_j is None:
             return _EMPTY, _EMPTY, "the joint-torque observer needs tau_j"
-        arrays = []
-        for name, value in (("q", q), ("tau_m", tau_m), ("tau_j", tau_j if joint else None)):
-            if value is None:
-                continue
-            try:
-                arr = np.ascontiguousarray(value, dtype=np.float64)
-            except (TypeError, ValueError, OverflowError):
-                return _EMPTY, _EMPTY, f"{name} must be numeric; got {value!r}"
-            if arr.shape != (n,):
-                return _EMPTY, _EMPTY, f"{name} must have shape ({n},); got {arr.shape}"
-            ok = self.limits.position_ok(arr) if name == "q" else self.limits.torque_ok(arr)
-            if not ok:
-                return _EMPTY, _EMPTY, self.limits.describe(name, arr)
-            arrays.append(arr)
-        return arrays[0], arrays[-1], ""
+        q_arr, message = as_sample(q, n, "q")
+        if message:
+            return _EMPTY, _EMPTY, message
+        if not self.limits.position_ok(q_arr):
+            return _EMPTY, _EMPTY, self.limits.describe("q", q_arr)
+        torques = {"tau_m": tau_m, "tau_j": tau_j} if joint else {"tau_m": tau_m}
+        tau = _EMPTY
+        for name, value in torques.items():
+            tau, message = as_sample(value, n, name)
+            if message:
+                return _EMPTY, _EMPTY, message
+            if not self.limits.torque_ok(tau):
+                return _EMPTY, _EMPTY, self.limits.describe(name, tau)
+        return q_arr, tau, ""
 
     def _judge(
         self, stream: _Stream | None, restart: bool, time: float, q: FloatArray, tau: FloatArray

@@ -208,7 +208,17 @@ class AccelerationObserver(_NominalObserver):
                 "q has no samples; pass a state to process an empty chunk, or at least one "
                 "sample to start at rest at q[0]"
             )
-        y, new_state = self.estimator.filter(q_arr, state)
+        if state is None:
+            state = self.estimator.initial_state(q_arr[0])
+        return self._run_checked(t_arr, q_arr, tau_arr, state)
+
+    def _run_checked(
+        self, t: FloatArray, q: FloatArray, tau: FloatArray, state: FilterState
+    ) -> tuple[ObserverSignals, FilterState]:
+        """:meth:`run` for checked arrays and a checked estimator state."""
+        n = self.n_dof
+        t_arr, q_arr, tau_arr = t, q, tau
+        y, new_state = self.estimator._run(q_arr, state)
         out = self._estimate(q_arr, y.velocity, y.acceleration, tau_arr)
         signals = ObserverSignals(
             t=t_arr,

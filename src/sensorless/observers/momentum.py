@@ -11,13 +11,13 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 from numpy.typing import ArrayLike
 from scipy import signal
 
 from .._validation import FloatArray, check_dt
 from ..exceptions import DimensionError, InputTypeError
 from ..robots.model import RobotModel
+from ..robots.recursion import MomentumTerms
 from ..signals import ObserverSignals
 from ._common import (
     _BLOCK,
@@ -201,14 +201,18 @@ class MomentumObserver(_NominalObserver):
     torque : {"motor", "joint"}
         ``"motor"``: τ are motor torques τ_m and the residual is r̂ (eq. 4.4);
         ``"joint"``: τ are joint-torque-sensor readings τ_J and it is r̂_s (eq. 4.9).
+    backend : {"auto", "numba", "numpy"}
+        How p, Cᵀq̇ and g are computed (:class:`~sensorless.robots.recursion.MomentumTerms`):
+        compiled with numba when it is installed (``pip install sensorless[fast]``),
+        else numpy over whole arrays and Pinocchio for one sample.
 
     Notes
     -----
     ``step`` does cheap checks only (shape, finiteness); ``run`` validates
-    whole arrays once and computes the model terms in one loop of Pinocchio
-    calls (private ``pin.Data``), then applies the recursions with
-    :func:`scipy.signal.lfilter`. Both use the same model-term, input and
-    coefficient functions. Not thread-safe: use one observer per thread.
+    whole arrays once and computes the model terms by one O(n) recursion over
+    the whole array, then applies the recursions with
+    :func:`scipy.signal.lfilter`. Both use the same input and coefficient
+    functions. Not thread-safe: use one observer per thread.
 
     Examples
     --------
@@ -229,12 +233,14 @@ class MomentumObserver(_NominalObserver):
         gain: ArrayLike = 20.0,
         friction: Any = "model",
         torque: str = "motor",
+        backend: str = "auto",
     ) -> None:
         super().__init__(robot, friction, torque)
         self._dt = check_dt(dt)
         self._gain = _check_gain(gain, robot.n_dof)
         self._pole, self._weight = _coefficients(self._gain, self._dt)
-        self._zero = np.zeros(robot.n_dof)
+        self._kernel = MomentumTerms.from_robot(robot, backend=backend)
+        self._scratch = np.empty((3, robot.n_dof))
 
     @property
     def dt(self) -> float:
@@ -268,23 +274,21 @@ class MomentumObserver(_NominalObserver):
     def _terms(
         self, q: FloatArray, qd: FloatArray
     ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """p = M q̇, Cᵀq̇ − g, τ̂_fr(q̇) and sign(q̇) for arrays of shape (n_samples, n_dof)."""
-        model, data, zero = self._pin_model, self._pin_data, self._zero
-        n_samples, n_dof = q.shape
-        momentum = np.empty_like(q)
-        gravity = np.empty_like(q)
-        coriolis = np.empty((n_samples, n_dof, n_dof))
-        rnea, grav, cor = pin.rnea, pin.computeGeneralizedGravity, pin.computeCoriolisMatrix
-        for k in range(n_samples):  # indexing is cheaper than zip over array rows
-            qk, qdk = q[k], qd[k]
-            gravity[k] = grav(model, data, qk)
-            # RNEA at zero velocity with q̈ := q̇ gives M(q) q̇ + g(q), armature included.
-            momentum[k] = rnea(model, data, qk, zero, qdk)
-            coriolis[k] = cor(model, data, qk, qdk)
-        momentum -= gravity
-        # Row vector times C: (q̇ᵀ C)ᵀ = Cᵀ q̇, batched over samples.
-        coriolis_gravity = np.matmul(qd[:, None, :], coriolis)[:, 0] - gravity
-        return momentum, coriolis_gravity, self._friction(qd), np.sign(qd)
+        """p = M q̇, Cᵀq̇ − g, τ̂_fr(q̇) and sign(q̇) for arrays of shape (n_samples, n_dof).
+
+        The rigid-body terms come from one O(n) recursion per sample
+        (:class:`~sensorless.robots.recursion.MomentumTerms`), over the whole
+        array at once: no M, no C and no per-sample Python loop.
+        """
+        p, coriolis, gravity = self._kernel.terms_checked(q, qd)
+        return p, coriolis - gravity, self._friction(qd), np.sign(qd)
+
+    def _terms_one(
+        self, q: FloatArray, qd: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """:meth:`_terms` of one sample of shape (n_dof,) (the streaming path)."""
+        p, coriolis, gravity = self._kernel.terms_one(q, qd, self._scratch)
+        return p.copy(), coriolis - gravity, self._friction(qd), np.sign(qd)
 
     # ------------------------------------------------------------ streaming
     def initial_state(self, q0: ArrayLike, qd0: ArrayLike | None = None) -> ObserverState:
@@ -307,8 +311,12 @@ class MomentumObserver(_NominalObserver):
         n = self.n_dof
         q = _one_sample(q0, n, "q0")
         qd = np.zeros((1, n)) if qd0 is None else _one_sample(qd0, n, "qd0")
+        return self._initial_state_checked(q, qd)
+
+    def _initial_state_checked(self, q: FloatArray, qd: FloatArray) -> ObserverState:
+        """:meth:`initial_state` for checked samples of shape (1, n_dof)."""
         p, vg, fr, sgn = (x[0] for x in self._terms(q, qd))
-        filtered = np.zeros((4, n))
+        filtered = np.zeros((4, q.shape[1]))
         filtered[_MODEL_TORQUE] = -vg
         filtered[_FRICTION] = fr
         filtered[_SIGN] = sgn
@@ -372,7 +380,7 @@ class MomentumObserver(_NominalObserver):
         shape (n_dof,); ``tau`` is copied into the new state. The fields of
         the returned sample are the rows of the new state's ``filtered``.
         """
-        p, vg, fr, sgn = [x[0] for x in self._terms(q[None], qd[None])]
+        p, vg, fr, sgn = self._terms_one(q, qd)
         inputs = np.empty((4, q.shape[0]))
         previous = (
             state.momentum, state.coriolis_gravity, state.friction_torque,
@@ -429,7 +437,20 @@ class MomentumObserver(_NominalObserver):
                     "q has no samples; pass a state to process an empty chunk, or at least one "
                     "sample to start at q[0]"
                 )
-            state = self.initial_state(q_arr[0], qd_arr[0])
+            state = self._initial_state_checked(q_arr[:1], qd_arr[:1])
+        return self._run_checked(t_arr, q_arr, qd_arr, tau_arr, state)
+
+    def _run_checked(
+        self,
+        t: FloatArray,
+        q: FloatArray,
+        qd: FloatArray,
+        tau: FloatArray,
+        state: ObserverState,
+    ) -> tuple[ObserverSignals, ObserverState]:
+        """:meth:`run` for checked, C-contiguous arrays and a checked state."""
+        t_arr, q_arr, qd_arr, tau_arr = t, q, qd, tau
+        n_samples, n = q.shape
         out = np.empty((4, n_samples, n))
         for start in range(0, n_samples, _BLOCK):
             block = slice(start, start + _BLOCK)

@@ -24,7 +24,7 @@ True
 from __future__ import annotations
 
 from types import ModuleType
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
@@ -90,9 +90,9 @@ class MomentumTerms:
     """p = M(q)q̇, C(q, q̇)ᵀq̇ and g(q) of a tree of one-DoF joints, O(n) per sample.
 
     The geometry, inertias, armature and gravity are read once from the
-    Pinocchio model into plain arrays; the model is not kept for the batch
-    path. Not thread-safe (the one-sample path reuses scratch buffers): give
-    each thread its own instance.
+    Pinocchio model into plain arrays; Pinocchio itself is called only by
+    :meth:`terms_one` without numba. Not thread-safe (the one-sample path
+    reuses scratch buffers): give each thread its own instance.
 
     Parameters
     ----------
@@ -106,8 +106,10 @@ class MomentumTerms:
     backend : {"auto", "numba", "numpy"}
         Compiled kernel or numpy. ``"auto"`` takes numba when importable.
     chunk_size : int
-        Samples per block of the numpy batch path; bounds its scratch memory to
-        about 170·n_dof·chunk_size bytes.
+        Samples per block of the numpy batch path; its scratch memory is about
+        320·n_dof·chunk_size bytes (9 MB at 7 dof and the default). The default
+        was the fastest measured at 7 dof; from 8192 on, OpenBLAS spreads the
+        small matrix products over threads for no gain.
 
     Notes
     -----
@@ -134,9 +136,7 @@ class MomentumTerms:
     q and adds nothing to Cᵀq̇.
     """
 
-    def __init__(
-        self, model: pin.Model, *, backend: str = "auto", chunk_size: int = 8192
-    ) -> None:
+    def __init__(self, model: pin.Model, *, backend: str = "auto", chunk_size: int = 4096) -> None:
         if backend not in BACKENDS:
             raise UnknownNameError(f"unknown backend {backend!r}; options: {list(BACKENDS)}")
         if backend == "numba" and _numba_kernels is None:
@@ -148,20 +148,17 @@ class MomentumTerms:
         self._read_model(model)
         self._build_block_matrices()
         self._scratch = np.zeros((self.n_dof, 23))
-        if self._kernels is None:
-            self._pin_model = model.copy()
-            self._pin_model.gravity = pin.Motion.Zero()
-            self._pin_data = self._pin_model.createData()
-            self._gravity_data = model.createData()
-            self._gravity_model = model.copy()
+        self._pinocchio = _PinocchioOneSample(model)
 
     @classmethod
-    def from_robot(cls, robot: RobotModel, **options: Any) -> MomentumTerms:
+    def from_robot(
+        cls, robot: RobotModel, *, backend: str = "auto", chunk_size: int = 4096
+    ) -> MomentumTerms:
         """Build from a :class:`~sensorless.robots.RobotModel` (its ``pinocchio_model``).
 
-        ``**options`` are ``backend`` and ``chunk_size`` of :class:`MomentumTerms`.
+        ``backend`` and ``chunk_size`` are those of :class:`MomentumTerms`.
         """
-        return cls(robot.pinocchio_model, **options)
+        return cls(robot.pinocchio_model, backend=backend, chunk_size=chunk_size)
 
     # ------------------------------------------------------------------ model
     def _read_model(self, model: pin.Model) -> None:
@@ -169,14 +166,18 @@ class MomentumTerms:
         if np.any(angular != 0.0):
             raise ModelError(f"model.gravity must be a pure linear field; angular part {angular}")
         n_dof = model.njoints - 1
-        joints = np.zeros((n_dof, 2), dtype=np.int64)
-        consts = np.zeros((n_dof, 23))
+        if n_dof == 0:
+            raise ModelError("the model has no joint; the momentum recursion needs at least one")
+        gravity = np.array(model.gravity.linear, dtype=float)
+        consts = np.zeros((n_dof, 28))
         frames = []
         for k in range(n_dof):
             kind, axis = _joint_axis(model, k + 1)
             frames.append(_frame_with_z(axis))
             parent = int(model.parents[k + 1]) - 1
-            joints[k] = parent, kind
+            consts[k, 23:25] = parent, kind
+            if parent < 0:
+                consts[k, 25:28] = gravity
             parent_frame = frames[parent] if parent >= 0 else np.eye(3)
             placement = model.jointPlacements[k + 1]
             consts[k, 0:9] = (parent_frame.T @ placement.rotation @ frames[k]).ravel()
@@ -191,9 +192,9 @@ class MomentumTerms:
             consts[k, 16:22] = about_origin[np.triu_indices(3)]
             consts[k, 22] = model.armature[model.joints[k + 1].idx_v]
         self.n_dof = n_dof
-        self._joints = joints
         self._consts = consts
-        self._gravity = np.array(model.gravity.linear, dtype=float)
+        self._parents = [int(parent) for parent in consts[:, 23]]
+        self._revolute = consts[:, 24] == 0.0
 
     def _build_block_matrices(self) -> None:
         """Constant matrices of the numpy path, acting on stacked per-joint vectors.
@@ -212,7 +213,7 @@ class MomentumTerms:
             for b in range(3):
                 self._forward[k, 3 * b : 3 * b + 3, 3 * b : 3 * b + 3] = rot.T
             self._forward[k, 0:3, 3:6] = -rot.T @ _skew(pos)
-            self._root_state[k, 6:9] = rot.T @ self._gravity
+            self._root_state[k, 6:9] = rot.T @ self._consts[k, 25:28]
             mass, first = self._consts[k, 12], _skew(self._consts[k, 13:16])
             about_origin = np.zeros((3, 3))
             about_origin[np.triu_indices(3)] = self._consts[k, 16:22]
@@ -227,7 +228,17 @@ class MomentumTerms:
                 self._upward[k, 3 * b : 3 * b + 3, 3 * b : 3 * b + 3] = rot
             for b in (0, 6):
                 self._upward[k, b + 3 : b + 6, b : b + 3] = _skew(pos) @ rot
-        self._revolute = self._joints[:, 1] == 0
+
+    @property
+    def kernel_constants(self) -> FloatArray:
+        """Read-only constants of the compiled kernel, shape (n_dof, 28).
+
+        The layout is that of :mod:`sensorless.robots._recursion_numba`, whose
+        ``terms_at`` other compiled code can call with this array.
+        """
+        view = self._consts.view()
+        view.flags.writeable = False
+        return view
 
     @property
     def backend(self) -> str:
@@ -235,9 +246,7 @@ class MomentumTerms:
         return "numpy" if self._kernels is None else "numba"
 
     # ------------------------------------------------------------------ batch
-    def terms(
-        self, q: ArrayLike, qd: ArrayLike
-    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def terms(self, q: ArrayLike, qd: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
         """p = M(q)q̇, C(q, q̇)ᵀq̇ and g(q) over a time series.
 
         Parameters
@@ -262,15 +271,21 @@ class MomentumTerms:
             raise DimensionError(
                 f"q and qd must have the same shape; got {qs.shape} and {qds.shape}"
             )
-        outputs = tuple(np.empty(qs.shape) for _ in range(3))
+        p, coriolis_t_qd, gravity = self.terms_checked(qs, qds)
+        if single:
+            return p[0], coriolis_t_qd[0], gravity[0]
+        return p, coriolis_t_qd, gravity
+
+    def terms_checked(self, qs: FloatArray, qds: FloatArray) -> FloatArray:
+        """:meth:`terms` for trusted arrays of shape (n_samples, n_dof): rows p, Cᵀq̇, g.
+
+        ``qs`` and ``qds`` are finite float64 arrays of one shape (the caller
+        checked them); returns an array of shape (3, n_samples, n_dof).
+        """
+        outputs = np.empty((3, *qs.shape))
         if self._kernels is not None:
             self._kernels.terms_batch(
-                np.ascontiguousarray(qs),
-                np.ascontiguousarray(qds),
-                self._joints,
-                self._consts,
-                self._gravity,
-                *outputs,
+                np.ascontiguousarray(qs), np.ascontiguousarray(qds), self._consts, outputs
             )
         else:
             for start in range(0, qs.shape[0], self.chunk_size):
@@ -278,34 +293,16 @@ class MomentumTerms:
                 block = self._chunk_numpy(
                     np.ascontiguousarray(qs[start:stop].T), np.ascontiguousarray(qds[start:stop].T)
                 )
-                for out, values in zip(outputs, block, strict=True):
-                    out[start:stop] = values.T
-        p, coriolis_t_qd, gravity = outputs
-        if single:
-            return p[0], coriolis_t_qd[0], gravity[0]
-        return p, coriolis_t_qd, gravity
+                outputs[:, start:stop] = block.transpose(0, 2, 1)
+        return outputs
 
     def _chunk_numpy(self, q: FloatArray, qd: FloatArray) -> FloatArray:
         """The recursion on arrays of shape (n_dof, n) (joints along axis 0): (3, n_dof, n)."""
-        n_dof, n = q.shape
         cos, sin = np.cos(q), np.sin(q)
-        vel = np.empty((n_dof, 9, n))
+        vel = self._forward_numpy(q, qd, cos, sin)
+        n_dof, n = q.shape
         wrench = np.zeros((n_dof, 12, n))
         out = np.empty((3, n_dof, n))
-        for k in range(n_dof):
-            parent = self._joints[k, 0]
-            if parent < 0:
-                vel[k] = self._root_state[k][:, None]
-            else:
-                np.matmul(self._forward[k], vel[parent], out=vel[k])
-            v = vel[k]
-            if self._revolute[k]:
-                _rotate_rows(v, cos[k], -sin[k])
-                v[5] += qd[k]
-            else:
-                v[0] += q[k] * v[4]
-                v[1] -= q[k] * v[3]
-                v[2] += qd[k]
         for k in range(n_dof - 1, -1, -1):
             v, w = vel[k], wrench[k]
             w += self._own[k] @ v
@@ -317,7 +314,7 @@ class MomentumTerms:
                 out[0, k] = w[2]
                 out[1, k] = w[0] * v[4] - w[1] * v[3]
                 out[2, k] = -w[8]
-            parent = self._joints[k, 0]
+            parent = self._parents[k]
             if parent < 0:
                 continue
             if self._revolute[k]:
@@ -330,10 +327,28 @@ class MomentumTerms:
         out[0] += self._consts[:, 22:23] * qd
         return out
 
-    # ------------------------------------------------------------------ one sample
-    def terms_one(
-        self, q: FloatArray, qd: FloatArray, out: FloatArray | None = None
+    def _forward_numpy(
+        self, q: FloatArray, qd: FloatArray, cos: FloatArray, sin: FloatArray
     ) -> FloatArray:
+        """Velocity ν, ω and gravity vector of every link in its frame: (n_dof, 9, n)."""
+        vel = np.empty((q.shape[0], 9, q.shape[1]))
+        for k, parent in enumerate(self._parents):
+            if parent < 0:
+                vel[k] = self._root_state[k][:, None]
+            else:
+                np.matmul(self._forward[k], vel[parent], out=vel[k])
+            v = vel[k]
+            if self._revolute[k]:
+                _rotate_rows(v, cos[k], -sin[k])
+                v[5] += qd[k]
+            else:
+                v[0] += q[k] * v[4]
+                v[1] -= q[k] * v[3]
+                v[2] += qd[k]
+        return vel
+
+    # ------------------------------------------------------------------ one sample
+    def terms_one(self, q: FloatArray, qd: FloatArray, out: FloatArray | None = None) -> FloatArray:
         """p, Cᵀq̇ and g of one sample, for streaming (no input checks).
 
         Parameters
@@ -358,14 +373,28 @@ class MomentumTerms:
         """
         if out is None:
             out = np.empty((3, self.n_dof))
-        if self._kernels is not None:
-            self._kernels.terms_one(
-                q, qd, self._joints, self._consts, self._gravity, self._scratch, out
-            )
-            return out
-        out[0] = pin.rnea(self._pin_model, self._pin_data, q, 0.0 * qd, qd)
-        out[1] = qd @ pin.computeCoriolisMatrix(self._pin_model, self._pin_data, q, qd)
-        out[2] = pin.computeGeneralizedGravity(self._gravity_model, self._gravity_data, q)
+        if self._kernels is None:
+            return self._pinocchio(q, qd, out)
+        self._kernels.terms_one(q, qd, self._consts, self._scratch, out)
+        return out
+
+
+class _PinocchioOneSample:
+    """p, Cᵀq̇ and g of one sample through Pinocchio (the path without numba)."""
+
+    def __init__(self, model: pin.Model) -> None:
+        self.model = model.copy()
+        self.data = self.model.createData()
+        self.weightless = model.copy()
+        self.weightless.gravity = pin.Motion.Zero()
+        self.weightless_data = self.weightless.createData()
+        self.zero = np.zeros(model.nv)
+
+    def __call__(self, q: FloatArray, qd: FloatArray, out: FloatArray) -> FloatArray:
+        # Without gravity, rnea(q, 0, q̇) = M(q) q̇, armature included.
+        out[0] = pin.rnea(self.weightless, self.weightless_data, q, self.zero, qd)
+        out[1] = qd @ pin.computeCoriolisMatrix(self.model, self.data, q, qd)
+        out[2] = pin.computeGeneralizedGravity(self.model, self.data, q)
         return out
 
 

@@ -14,21 +14,27 @@ TimeVariantThreshold   ``"time_variant"``     ±α + γ h + ε_fr f, eq. (5.33);
 VelocityThreshold      ``"velocity"``         LT/UT of eq. (4.35)-(4.39), fit eq. (4.45)
 ModelBasedThreshold    ``"model_based"``      ±B_c(t) of eq. (3.36) for τ̂_c (eq. 3.16)
 =====================  =====================  ==========================================
+
+:class:`CombinedVelocityThreshold` (``"velocity_combined"``) fits the
+velocity-based bounds of r̂ and r̂_s together (eq. 4.47). Thresholds give
+bounds only; :class:`sensorless.detection.Detector` turns them into events.
+
+Modules: :mod:`.base` (the estimator skeleton), :mod:`.fitting` (what the
+fits share), :mod:`.filtering` (K_I/(s+K_I)), :mod:`.checks`, :mod:`.state`
+(stream inputs and states), :mod:`.files` (YAML format, :data:`METHODS`),
+one module per family (:mod:`.velocity` gathers :mod:`.velocity_single`,
+:mod:`.velocity_combined` and their bins, :mod:`.velocity_bins`). Nothing
+here imports :mod:`sensorless.detection`.
 """
 
 from __future__ import annotations
 
-from .base import (
-    METHODS,
-    Threshold,
-    ThresholdInputs,
-    ThresholdState,
-    first_order,
-    first_order_step,
-    load_threshold,
-)
+from .base import Threshold
 from .constant import ConstantThreshold
+from .files import METHODS, load_threshold
+from .filtering import first_order, first_order_step
 from .model_based import ModelBasedThreshold
+from .state import ThresholdInputs, ThresholdState
 from .time_variant import TimeVariantThreshold
 from .velocity import CombinedVelocityState, CombinedVelocityThreshold, VelocityThreshold
 

@@ -31,10 +31,8 @@ Joints are numbered from 1, as in :class:`~sensorless.signals.Event`. The
 hyper-parameter ``joints`` selects the monitored joints; the bounds of the
 others are ``-inf`` and ``+inf``.
 
-Where the rest lives: the observer's filter K_I/(s+K_I) in :mod:`.filtering`,
-input checks in :mod:`.checks`, :class:`ThresholdInputs` and
-:class:`ThresholdState` in :mod:`.state`, the file format and :data:`METHODS`
-in :mod:`.files`; all are importable from here too.
+The filter K_I/(s+K_I) is in :mod:`.filtering`, the checks in :mod:`.checks`,
+the stream types in :mod:`.state` and the file format in :mod:`.files`.
 
 Writing a new family
 --------------------
@@ -70,7 +68,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from .._validation import FloatArray, check_dt, check_increasing
 from ..exceptions import DimensionError, InputTypeError, InputValueError, NotFittedError
@@ -87,6 +85,7 @@ from .checks import (
 )
 from .files import METHODS, load_threshold, save_threshold, threshold_from_dict, threshold_to_dict
 from .filtering import first_order, first_order_step
+from .fitting import BoolArray
 from .state import ThresholdInputs, ThresholdState
 
 if TYPE_CHECKING:
@@ -102,37 +101,20 @@ __all__ = [
     "load_threshold",
 ]
 
-BoolArray = NDArray[np.bool_]
-
-ROUNDING_GUARD = 1e-12
-"""Relative widening of fitted bounds [-] so that rounding never puts fit data outside them.
-
-A bound is computed as ``centre + alpha`` while ``alpha`` was fitted as
-``max |r - centre|``; the two roundings can differ by an ulp. Each family
-widens its constant part by ``ROUNDING_GUARD * max_t (|r| + |centre|)``.
-"""
-
 Bounds = tuple[FloatArray, FloatArray]
+"""Lower and upper bounds [N m]."""
 StreamBounds = tuple[FloatArray, FloatArray, ThresholdState]
-
-
-def stack(runs: Sequence[ObserverSignals], keep: Sequence[BoolArray], name: str) -> FloatArray:
-    """Rows of series ``name`` of all runs where ``keep`` is true, stacked along axis 0."""
-    return np.concatenate([getattr(run, name)[k] for run, k in zip(runs, keep, strict=True)])
-
-
-def rounding_guard(*terms: FloatArray) -> FloatArray:
-    """Per-joint widening ``ROUNDING_GUARD * max_t sum |terms|`` [N m]; see ROUNDING_GUARD."""
-    total = np.sum([np.abs(term) for term in terms], axis=0)
-    return ROUNDING_GUARD * np.max(total, axis=0)
+"""Lower and upper bounds [N m] and the state after them."""
 
 
 class Threshold(abc.ABC):
     """Base of the threshold families: fit on collision-free runs, give lower/upper bounds.
 
-    Subclasses define ``name``, their hyper-parameters in ``__init__`` and the
-    fitted attributes. Every family has these hyper-parameters:
+    Subclasses define ``name``, their own hyper-parameters in ``__init__``
+    (which passes the common ones to this one) and the fitted attributes.
 
+    Parameters
+    ----------
     margin : float or array-like of shape (n_dof,)
         Absolute widening of the bounds [N m], >= 0 (what it widens is
         family-specific).
@@ -169,6 +151,11 @@ class Threshold(abc.ABC):
     n_dof_: int
     gain_: FloatArray
     dt_: float
+
+    def __init__(self, margin: Any = 0.0, *, joints: Any = None, transient: float = 0.0) -> None:
+        self.margin = margin
+        self.joints = joints
+        self.transient = transient
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -426,8 +413,8 @@ class Threshold(abc.ABC):
         ----------
         state : ThresholdState
             From :meth:`initial_state` or the previous call.
-        model_torque, friction, sign, velocity, position, acceleration : array-like of shape (n_dof,)
-            This sample of the inputs of :meth:`process`.
+        model_torque, friction, sign, velocity, position, acceleration : array-like
+            This sample of the inputs of :meth:`process`, each of shape (n_dof,).
 
         Returns
         -------
@@ -487,7 +474,7 @@ class Threshold(abc.ABC):
     def _process_checked(self, state: ThresholdState, inputs: ThresholdInputs) -> StreamBounds:
         """Bounds of checked inputs; joints that are not monitored get ``-inf``/``+inf``."""
         lower, upper, new_state = self._run(state, inputs)
-        joints = self.monitored_joints_
+        joints = check_joints(self.joints, self.n_dof_)
         if len(joints) < self.n_dof_:
             monitored = np.zeros(self.n_dof_, dtype=bool)
             monitored[np.asarray(joints) - 1] = True

@@ -190,9 +190,7 @@ def as_inputs(
     counts: list[int] = []
 
     def convert(value: ArrayLike, name: str) -> FloatArray:
-        arr = as_samples(
-            value, n_dof, name, one_sample=one_sample, allow_nonfinite=allow_nonfinite
-        )
+        arr = as_samples(value, n_dof, name, one_sample=one_sample, allow_nonfinite=allow_nonfinite)
         if counts and arr.shape[0] != counts[0]:
             raise DimensionError(f"{name} has {arr.shape[0]} samples; model_torque has {counts[0]}")
         counts.append(arr.shape[0])

@@ -18,13 +18,13 @@ array([0.7])
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from .._validation import FloatArray
 from ..signals import ObserverSignals
-from .base import BoolArray, Threshold, ThresholdInputs, ThresholdState, stack
+from .base import StreamBounds, Threshold
+from .fitting import BoolArray, stack
+from .state import ThresholdInputs, ThresholdState
 
 __all__ = ["ConstantThreshold"]
 
@@ -49,11 +49,6 @@ class ConstantThreshold(Threshold):
 
     beta_: FloatArray
 
-    def __init__(self, margin: Any = 0.0, *, joints: Any = None, transient: float = 0.0) -> None:
-        self.margin = margin
-        self.joints = joints
-        self.transient = transient
-
     def _attribute_names(self) -> tuple[str, ...]:
         return ("beta_",)
 
@@ -61,8 +56,6 @@ class ConstantThreshold(Threshold):
         residual = stack(runs, keep, "residual")
         self.beta_ = np.max(np.abs(residual), axis=0) + margin
 
-    def _run(
-        self, state: ThresholdState, inputs: ThresholdInputs
-    ) -> tuple[FloatArray, FloatArray, ThresholdState]:
+    def _run(self, state: ThresholdState, inputs: ThresholdInputs) -> StreamBounds:
         upper = np.broadcast_to(self.beta_, inputs.model_torque.shape).copy()
         return -upper, upper, state

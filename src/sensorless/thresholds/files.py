@@ -24,7 +24,13 @@ from ..exceptions import DimensionError, InputValueError, UnknownNameError
 if TYPE_CHECKING:
     from .base import Threshold
 
-__all__ = ["METHODS", "load_threshold", "save_threshold", "threshold_from_dict", "threshold_to_dict"]
+__all__ = [
+    "METHODS",
+    "load_threshold",
+    "save_threshold",
+    "threshold_from_dict",
+    "threshold_to_dict",
+]
 
 METHODS: dict[str, type[Threshold]] = {}
 """Threshold families by name (``"constant"``, ``"time_variant"``, ``"velocity"``, ...)."""

@@ -76,8 +76,9 @@ from ..robots import load as load_robot
 from ..robots.base_parameters import BaseParameters, base_parameters
 from ..robots.model import N_LINK_PARAMETERS, RobotModel
 from ..signals import ObserverSignals
-from .base import BoolArray, Threshold, rounding_guard
+from .base import StreamBounds, Threshold
 from .checks import check_bound, regular_period
+from .fitting import BoolArray, rounding_guard
 from .state import ThresholdInputs, ThresholdState
 
 __all__ = ["ModelBasedThreshold"]
@@ -88,7 +89,7 @@ _UNALIGNED = "JointModelRevoluteUnaligned"
 _BASE_CACHE: weakref.WeakKeyDictionary[RobotModel, BaseParameters] = weakref.WeakKeyDictionary()
 
 States = tuple[FloatArray, FloatArray]
-"""Joint positions q [rad] and estimated accelerations q̂̈ [rad/s²] of a run, each (n_samples, n_dof)."""
+"""Positions q [rad] and estimated accelerations q̂̈ [rad/s²], each (n_samples, n_dof)."""
 
 
 class ModelBasedThreshold(Threshold):
@@ -178,14 +179,12 @@ class ModelBasedThreshold(Threshold):
         transient: float = 0.0,
         chunk_size: int = DEFAULT_CHUNK_SIZE,
     ) -> None:
+        super().__init__(margin, joints=joints, transient=transient)
         self.robot = robot
         self.btheta = btheta
         self.bq = bq
-        self.margin = margin
         self.disturbance = disturbance
         self.reference_window = reference_window
-        self.joints = joints
-        self.transient = transient
         self.chunk_size = chunk_size
 
     # ----------------------------------------------------------------- robot
@@ -295,26 +294,36 @@ class ModelBasedThreshold(Threshold):
         bq[-1] = 0.0
         return bq
 
-    def _run(
-        self, state: ThresholdState, inputs: ThresholdInputs
-    ) -> tuple[FloatArray, FloatArray, ThresholdState]:
+    def _run(self, state: ThresholdState, inputs: ThresholdInputs) -> StreamBounds:
+        # The one check of streamed inputs: step and process do not know what a family reads.
         position, acceleration = _require_states(inputs.position, inputs.acceleration, "inputs")
-        terms = error_bound_terms(
-            self.robot_model(), self.independent_, self.theta_, position, inputs.velocity,
-            acceleration, self.bq_, self.btheta_, chunk_size=self.chunk_size,
-        )  # fmt: skip
+        terms = self._terms(position, inputs.velocity, acceleration)
         upper = _model_part(terms) + self.b_fr_ + self.b_d_
         return -upper, upper, state
 
+    def _terms(
+        self, position: FloatArray, velocity: FloatArray, acceleration: FloatArray
+    ) -> BoundTerms:
+        """The trajectory terms of B_c (eq. 3.36) for checked q, q̂̇, q̂̈."""
+        return error_bound_terms(
+            self.robot_model(), self.independent_, self.theta_, position, velocity,
+            acceleration, self.bq_, self.btheta_, chunk_size=self.chunk_size,
+        )  # fmt: skip
+
     def check_signals(self, signals: ObserverSignals) -> None:
         """As :meth:`Threshold.check_signals`, and require positions and accelerations."""
+        self._signal_states(signals)
+
+    def _signal_states(self, signals: ObserverSignals) -> States:
+        """:meth:`check_signals`, returning the positions and accelerations of ``signals``."""
         super().check_signals(signals)
-        _require_states(signals.position, signals.acceleration, "signals")
+        states = _require_states(signals.position, signals.acceleration, "signals")
         if self.robot_model().n_dof != signals.n_dof:
             raise DimensionError(
                 f"the nominal robot has {self.robot_model().n_dof} joints; signals have "
                 f"{signals.n_dof}"
             )
+        return states
 
     def bound_terms(self, signals: ObserverSignals) -> BoundTerms:
         """The three trajectory terms of B_c (eq. 3.36) over a run, for plots [N m].
@@ -330,12 +339,8 @@ class ModelBasedThreshold(Threshold):
             ``q_error``, ``cross`` and ``parameter_error``, each of shape
             (n_samples, n_dof); B_c is their sum plus ``b_fr_ + b_d_``.
         """
-        self.check_signals(signals)
-        position, acceleration = _require_states(signals.position, signals.acceleration, "")
-        return error_bound_terms(
-            self.robot_model(), self.independent_, self.theta_, position, signals.velocity,
-            acceleration, self.bq_, self.btheta_, chunk_size=self.chunk_size,
-        )  # fmt: skip
+        position, acceleration = self._signal_states(signals)
+        return self._terms(position, signals.velocity, acceleration)
 
     def _check_run(self, run: ObserverSignals, n_dof: int, what: str) -> States:
         """Check a fit run; return its positions [rad] and accelerations [rad/s²]."""

@@ -47,10 +47,12 @@ from typing import Any
 import numpy as np
 from scipy.optimize import linprog
 
-from .._validation import FloatArray
+from .._validation import FloatArray, check_int
 from ..exceptions import InputValueError
 from ..signals import ObserverSignals
-from .base import BoolArray, Threshold, ThresholdInputs, ThresholdState, rounding_guard, stack
+from .base import StreamBounds, Threshold
+from .fitting import BoolArray, rounding_guard, stack
+from .state import ThresholdInputs, ThresholdState
 
 __all__ = ["FORMS", "TimeVariantThreshold"]
 
@@ -108,10 +110,8 @@ class TimeVariantThreshold(Threshold):
         fit_method: str = "least_squares",
         max_lp_samples: int = 20_000,
     ) -> None:
-        self.margin = margin
+        super().__init__(margin, joints=joints, transient=transient)
         self.form = form
-        self.joints = joints
-        self.transient = transient
         self.fit_method = fit_method
         self.max_lp_samples = max_lp_samples
 
@@ -143,6 +143,12 @@ class TimeVariantThreshold(Threshold):
 
     def _fit(self, runs: list[ObserverSignals], keep: list[BoolArray], margin: FloatArray) -> None:
         form = self._check_form()
+        if self.fit_method not in FIT_METHODS:
+            raise InputValueError(
+                f"fit_method must be one of {list(FIT_METHODS)}; got {self.fit_method!r}"
+            )
+        # Two coefficients per joint: the linear program needs more samples than that.
+        max_samples = check_int(self.max_lp_samples, "max_lp_samples", 3, "TimeVariantThreshold")
         residual = stack(runs, keep, "residual")
         inputs = ThresholdInputs(*(stack(runs, keep, name) for name in ThresholdInputs._fields[:4]))
         # The hysteretic term enters with a minus sign: regress on -sign to get C directly.
@@ -150,36 +156,31 @@ class TimeVariantThreshold(Threshold):
         n_dof = residual.shape[1]
         gamma = np.empty(n_dof)
         coefficient = np.empty(n_dof)
-        if self.fit_method not in FIT_METHODS:
-            raise InputValueError(
-                f"fit_method must be one of {list(FIT_METHODS)}; got {self.fit_method!r}"
-            )
         for j in range(n_dof):
             design = np.column_stack([inputs.model_torque[:, j], second[:, j]])
             if self.fit_method == "minimax":
-                gamma[j], coefficient[j] = _chebyshev(design, residual[:, j], self.max_lp_samples)
+                gamma[j], coefficient[j] = _chebyshev(design, residual[:, j], max_samples)
             else:
                 solution = np.linalg.lstsq(design, residual[:, j], rcond=None)[0]
                 gamma[j], coefficient[j] = solution
         centre = self._centre(gamma, coefficient, inputs)
         error = residual - centre
         self.gamma_ = gamma
-        setattr(self, self._coefficient_name(), coefficient)
+        setattr(self, _COEFFICIENTS[form], coefficient)
         self.alpha_ = np.max(np.abs(error), axis=0) + margin + rounding_guard(residual, centre)
         self.beta_ = np.max(np.abs(residual), axis=0) + margin
 
-    def _run(
-        self, state: ThresholdState, inputs: ThresholdInputs
-    ) -> tuple[FloatArray, FloatArray, ThresholdState]:
+    def _run(self, state: ThresholdState, inputs: ThresholdInputs) -> StreamBounds:
         # form was checked by fit or from_dict (through _attribute_names)
         centre = self._centre(self.gamma_, getattr(self, _COEFFICIENTS[self.form]), inputs)
         return centre - self.alpha_, centre + self.alpha_, state
 
 
 def _chebyshev(design: FloatArray, target: FloatArray, max_samples: int) -> FloatArray:
-    """Coefficients x minimising max |target - design x| (L∞ fit) by linear programming."""
-    if max_samples < design.shape[1] + 1:
-        raise InputValueError(f"max_lp_samples must exceed {design.shape[1]}; got {max_samples}")
+    """Coefficients x minimising max |target - design x| (L∞ fit) by linear programming.
+
+    ``max_samples`` (> the number of columns of ``design``) evenly spaced rows are used at most.
+    """
     step = max(1, int(np.ceil(design.shape[0] / max_samples)))
     a, b = design[::step], target[::step]
     ones = np.ones((a.shape[0], 1))

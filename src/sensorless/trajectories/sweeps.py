@@ -17,7 +17,7 @@ from .._validation import FloatArray, as_float_array, check_dt
 from ..exceptions import DimensionError, InputTypeError, InputValueError
 from .base import Evaluation, Trajectory, _check_radians, _vector
 
-__all__ = ["VelocitySweep"]
+__all__ = ["VelocitySweep", "sweep_velocities"]
 
 
 def _ramp_shape(tau: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -45,6 +45,44 @@ def _limit(x: ArrayLike, n_dof: int, name: str) -> FloatArray:
     if np.isnan(arr).any():
         raise InputValueError(f"position_limits {name} must not contain NaN; got {arr.tolist()}")
     return arr
+
+
+def _grid(lo: float, hi: float, step: float) -> FloatArray:
+    if not (np.isfinite([lo, hi, step]).all() and step > 0.0 and hi >= lo):
+        raise InputValueError(
+            f"a sweep must be (low, high, step) with low <= high and step > 0; got {(lo, hi, step)}"
+        )
+    n = int(np.floor((hi - lo) / step + 1e-9))
+    # Rounding removes the float noise of lo + k*step so that both sweeps share values.
+    return np.round(lo + step * np.arange(n + 1), 12)
+
+
+def sweep_velocities(
+    fast: tuple[float, float, float] = (-2.0, 2.0, 0.16),
+    slow: tuple[float, float, float] = (-0.11, 0.11, 0.01),
+) -> FloatArray:
+    """Constant velocities of the friction experiments, thesis §2.4.1.
+
+    Parameters
+    ----------
+    fast : tuple (low, high, step), default (-2, 2, 0.16)
+        Wide sweep [rad/s].
+    slow : tuple (low, high, step), default (-0.11, 0.11, 0.01)
+        Slow sweep [rad/s].
+
+    Returns
+    -------
+    velocities : ndarray of shape (n_velocities,)
+        Sorted, unique velocities of both sweeps [rad/s]; zero is excluded.
+
+    Examples
+    --------
+    >>> v = sweep_velocities()
+    >>> v.size, float(v[0]), float(v[-1]), bool((v != 0).all())
+    (46, -2.0, 2.0, True)
+    """
+    values = np.unique(np.concatenate([_grid(*fast), _grid(*slow)]))
+    return values[values != 0.0]
 
 
 class VelocitySweep(Trajectory):
@@ -77,7 +115,7 @@ class VelocitySweep(Trajectory):
         Plateau velocities [rad/s], nonzero, in pairs ``+v, -v`` (matched
         to 1e-9 rad/s; the negative ones are then taken as the exact mirror
         of the positive ones); duplicates are dropped. By default the thesis's
-        :func:`sensorless.identification.friction.sweep_velocities`.
+        :func:`sweep_velocities`.
     hold : float, default 1.0
         Duration of each plateau [s].
     ramp : float, default 0.5
@@ -125,9 +163,6 @@ class VelocitySweep(Trajectory):
         _check_radians(home_arr, "home")
         n_dof = home_arr.size
         if velocities is None:
-            # Imported here: the identification package imports this module.
-            from ..identification.friction import sweep_velocities
-
             velocities = sweep_velocities()
         self.home = home_arr
         self.joints = self._check_joints(joints, n_dof)
@@ -321,7 +356,7 @@ class VelocitySweep(Trajectory):
             ``"velocity_sweep"``), ``joints``, ``hold`` [s], ``ramp`` [s],
             and either ``velocities`` [rad/s] or the sweep tuples ``fast``
             and/or ``slow`` ``[low, high, step]`` [rad/s] of
-            :func:`~sensorless.identification.friction.sweep_velocities`
+            :func:`sweep_velocities`
             (``slow: null`` keeps the fast sweep alone).
         position_limits : (lower, upper), optional
             Joint limits [rad] checked at construction.
@@ -370,8 +405,6 @@ class VelocitySweep(Trajectory):
                 raise InputValueError(
                     "give either 'velocities' or the sweep tuples 'fast'/'slow', not both"
                 )
-            from ..identification.friction import sweep_velocities
-
             fast = tuple(spec.get("fast", (-2.0, 2.0, 0.16)))
             slow = spec.get("slow", (-0.11, 0.11, 0.01))
             velocities = sweep_velocities(fast, fast if slow is None else tuple(slow))

@@ -1,0 +1,102 @@
+"""Live-monitor cost on the 7-joint Panda: one stream step per family, and the batch path.
+
+Prints, in one process:
+
+* the Pinocchio floor of one observer step: ``crba`` + ``computeCoriolisMatrix``
+  + ``computeGeneralizedGravity`` on one sample, median over the samples;
+* per threshold family, the median and p99 [µs] of ``CollisionMonitor.step``
+  and its ratio to the floor;
+* batch ``CollisionMonitor.run`` in samples/s beside the bare loop of the
+  three Pinocchio calls over the same samples.
+
+Every figure is the median of ``REPEATS`` runs. Run with
+``.venv/bin/python benchmarks/bench_monitor.py``.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+
+import numpy as np
+import pinocchio as pin
+
+from sensorless.monitor import CollisionMonitor, tune
+from sensorless.simulation.scenario import load_scenario
+
+FAMILIES = ("constant", "time-variant", "hysteretic", "velocity", "model")
+REPEATS = 5
+STREAM_SAMPLES = 3000
+
+
+def pinocchio_floor(model: pin.Model, q: np.ndarray, qd: np.ndarray) -> list[float]:
+    """Seconds per sample of the three standard calls, one timing per sample."""
+    data = model.createData()
+    out = []
+    for k in range(q.shape[0]):
+        start = time.perf_counter()
+        pin.crba(model, data, q[k])
+        pin.computeCoriolisMatrix(model, data, q[k], qd[k])
+        pin.computeGeneralizedGravity(model, data, q[k])
+        out.append(time.perf_counter() - start)
+    return out
+
+
+def stream_costs(monitor: CollisionMonitor, t, q, tau) -> list[float]:
+    """Seconds of each ``step`` after the settling window."""
+    monitor.reset()
+    out = []
+    for k in range(t.shape[0]):
+        start = time.perf_counter()
+        monitor.step(t[k], q[k], tau[k])
+        out.append(time.perf_counter() - start)
+    return out
+
+
+def main() -> None:
+    scenario = load_scenario("panda-gaz").with_duration(8.0)
+    free = [scenario.run(seed=s, collisions=False).log for s in (1, 2)]
+    log = scenario.run(seed=3).log
+    nominal = scenario.robots()[1]
+    model = nominal.pinocchio_model
+    qd = np.gradient(log.q, log.dt, axis=0)
+    n = STREAM_SAMPLES
+    floors = [statistics.median(pinocchio_floor(model, log.q[:n], qd[:n])) for _ in range(REPEATS)]
+    floor = statistics.median(floors)
+    print(f"Panda (7 joints), {n} samples, median of {REPEATS} runs")
+    print(f"Pinocchio floor (crba + Coriolis + gravity, one sample): {1e6 * floor:.2f} µs")
+    print(f"{'family':<14}{'median µs':>11}{'p99 µs':>9}{'× floor':>9}")
+    for method in FAMILIES:
+        threshold, settings = tune(free, nominal, method, margin=0.05)
+        monitor = CollisionMonitor(nominal, threshold, settings)
+        runs = [stream_costs(monitor, log.t[:n], log.q[:n], log.tau_m[:n]) for _ in range(REPEATS)]
+        settled = int(np.ceil(monitor.settle / monitor.dt))
+        median = statistics.median(statistics.median(r[settled:]) for r in runs)
+        p99 = statistics.median(float(np.percentile(r[settled:], 99)) for r in runs)
+        print(f"{method:<14}{1e6 * median:>11.1f}{1e6 * p99:>9.1f}{median / floor:>9.1f}")
+
+    threshold, settings = tune(free, nominal, "time-variant", margin=0.05)
+    monitor = CollisionMonitor(nominal, threshold, settings)
+    batch = []
+    for _ in range(REPEATS):
+        start = time.perf_counter()
+        monitor.run(log)
+        batch.append(time.perf_counter() - start)
+    bare = []
+    data = model.createData()
+    for _ in range(REPEATS):
+        start = time.perf_counter()
+        for k in range(log.n_samples):
+            pin.crba(model, data, log.q[k])
+            pin.computeCoriolisMatrix(model, data, log.q[k], qd[k])
+            pin.computeGeneralizedGravity(model, data, log.q[k])
+        bare.append(time.perf_counter() - start)
+    rate = log.n_samples / statistics.median(batch)
+    bare_rate = log.n_samples / statistics.median(bare)
+    print(f"batch run (time-variant), {log.n_samples} samples: {rate:,.0f} samples/s")
+    print(f"bare loop of the three Pinocchio calls: {bare_rate:,.0f} samples/s")
+    print(f"batch per-sample cost / Pinocchio per-sample cost: {bare_rate / rate:.2f}")
+
+
+if __name__ == "__main__":
+    main()

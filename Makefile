@@ -25,10 +25,7 @@ test: $(STAMP)
 	if [ $$status -eq 5 ]; then echo "pytest collected no tests"; exit 0; fi; exit $$status
 
 bench: $(STAMP)
-	$(BIN)/python benchmarks/bench_dynamics.py
-	$(BIN)/python benchmarks/bench_simulation.py
-	$(BIN)/python benchmarks/bench_detection.py
-	$(BIN)/python benchmarks/bench_identification.py
+	for script in benchmarks/bench_*.py; do echo "== $$script"; $(BIN)/python $$script || exit 1; done
 
 clean:
 	rm -rf $(VENV) out .pytest_cache .mypy_cache .ruff_cache

@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike
 
 from ._validation import FloatArray
 from .evaluation import Evaluation, Window, collision_windows
+from .evaluation.scoring import check_evaluations
 from .exceptions import DimensionError, InputTypeError, InputValueError
 from .io import Log
 from .signals import Event, ObserverSignals
@@ -352,19 +353,12 @@ def plot_evaluation(
     if isinstance(evaluations, Evaluation):
         items = [(evaluations.method or "events", evaluations)]
     elif isinstance(evaluations, Mapping):
-        items = [(str(name), evaluation) for name, evaluation in evaluations.items()]
+        items = [(str(name), evaluation) for name, evaluation in check_evaluations(evaluations)]
     else:
         raise InputTypeError(
             "evaluations must be an Evaluation or a mapping {method name: Evaluation}; got "
             f"{type(evaluations).__name__}"
         )
-    if not items:
-        raise InputValueError("evaluations must hold at least one {method name: Evaluation}")
-    for name, evaluation in items:
-        if not isinstance(evaluation, Evaluation):
-            raise InputTypeError(
-                f"evaluations[{name!r}] must be an Evaluation; got {type(evaluation).__name__}"
-            )
     t_start = min(evaluation.t_start for _, evaluation in items)
     t_end = max(evaluation.t_start + evaluation.duration for _, evaluation in items)
     min_width = 0.002 * (t_end - t_start)

@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike
 
 from .._validation import FloatArray, as_float_array, as_joint_array, check_finite
 from ..exceptions import DimensionError, ModelError
+from . import kinematics, regressors
 from .builders import (
     Convention,
     LinksLike,
@@ -43,7 +44,6 @@ from .inertia import (
     MotorData,
     inertia_from_parameters,
     parameters_from_inertia,
-    standard_regressor,
 )
 
 if TYPE_CHECKING:
@@ -454,157 +454,56 @@ class RobotModel:
     def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> FloatArray:
         """Regressor Y(q, q̇, q̈) of the standard parameters: Y π = inverse dynamics (eq. 2.11).
 
-        Columns follow :meth:`parameter_names` (11 per link, armature last).
-
-        Parameters
-        ----------
-        q, qd, qdd : array-like of shape (n_dof,) or (n_samples, n_dof)
-            Joint positions [rad], velocities [rad/s], accelerations [rad/s²].
-
-        Returns
-        -------
-        ndarray of shape (n_dof, 11·n_dof) or (n_samples, n_dof, 11·n_dof)
+        See :func:`sensorless.robots.regressors.regressor`.
         """
-        shape = (self.n_dof, self.n_dof * N_LINK_PARAMETERS)
-        states = (q, "q"), (qd, "qd"), (qdd, "qdd")
-        return self._per_sample(standard_regressor, shape, *states)
+        return regressors.regressor(self, q, qd, qdd)
 
     def regressor_terms(self, q: ArrayLike) -> FloatArray:
         """Split regressor Y_k^q(q) of eq. 3.10–3.12: Y(q, q̇, q̈) = Σ_k Y_k^q(q) Q_k.
 
-        The terms are ordered as :func:`q_vector`: Y_{M_i} (i = 1..n, columns of
-        M), Y_{B_ij} (i < j, coefficients of q̇_i q̇_j), Y_{C_i} (coefficients of
-        q̇_i²), Y_g. See :meth:`regressor_term_labels`.
-
-        Parameters
-        ----------
-        q : array-like of shape (n_dof,) or (n_samples, n_dof)
-            Joint positions [rad].
-
-        Returns
-        -------
-        ndarray of shape (l, n_dof, 11·n_dof) or (n_samples, l, n_dof, 11·n_dof)
-            With l = (n² + 3n + 2)/2.
+        See :func:`sensorless.robots.regressors.regressor_terms`.
         """
-        n = self.n_dof
-        shape = ((n * n + 3 * n + 2) // 2, n, n * N_LINK_PARAMETERS)
-        return self._per_sample(_regressor_terms, shape, (q, "q"))
+        return regressors.regressor_terms(self, q)
 
     def regressor_term_labels(self) -> list[str]:
         """Labels of :meth:`regressor_terms`: ``M1.., B12.., C1.., g``."""
-        n = self.n_dof
-        pairs = [f"B{i + 1}{j + 1}" for i in range(n) for j in range(i + 1, n)]
-        return (
-            [f"M{i}" for i in range(1, n + 1)] + pairs + [f"C{i}" for i in range(1, n + 1)] + ["g"]
-        )
+        return regressors.regressor_term_labels(self.n_dof)
 
     def q_vector(self, qd: ArrayLike, qdd: ArrayLike) -> FloatArray:
         """The vector Q = [q̈; q̇_i q̇_j (i<j); q̇_i²; 1] of eq. 3.11.
 
-        Parameters
-        ----------
-        qd, qdd : array-like of shape (n_dof,) or (n_samples, n_dof)
-            Joint velocities [rad/s] and accelerations [rad/s²].
-
-        Returns
-        -------
-        ndarray of shape (l,) or (n_samples, l), l = (n² + 3n + 2)/2
+        ``qd`` [rad/s] and ``qdd`` [rad/s²] have shape (n_dof,) or (n_samples, n_dof);
+        Q has shape (l,) or (n_samples, l). See :func:`sensorless.robots.regressors.q_vector`.
         """
         (qds, qdds), single = self._states((qd, "qd"), (qdd, "qdd"))
-        upper_i, upper_j = np.triu_indices(self.n_dof, 1)
-        out = np.hstack(
-            [qdds, qds[:, upper_i] * qds[:, upper_j], qds**2, np.ones((qds.shape[0], 1))]
-        )
+        out = regressors.q_vector(qds, qdds)
         return out[0] if single else out
 
     # ------------------------------------------------------------------ kinematics
     def link_pose(self, q: ArrayLike, link: int | str) -> FloatArray:
         """Homogeneous transform of a link frame in the base frame [m].
 
-        Parameters
-        ----------
-        q : array-like of shape (n_dof,) or (n_samples, n_dof)
-            Joint positions [rad].
-        link : int or str
-            Link number (1-based) or joint name.
-
-        Returns
-        -------
-        ndarray of shape (4, 4) or (n_samples, 4, 4)
+        See :func:`sensorless.robots.kinematics.link_pose`.
         """
-        jid = self.link_id(link)
-
-        def pose(model: pin.Model, data: pin.Data, qk: FloatArray) -> FloatArray:
-            pin.forwardKinematics(model, data, qk)
-            return np.asarray(data.oMi[jid].homogeneous)
-
-        return self._per_sample(pose, (4, 4), (q, "q"))
+        return kinematics.link_pose(self, q, link)
 
     def forward_kinematics(
         self, q: ArrayLike, link: int | str, point: ArrayLike = (0.0, 0.0, 0.0)
     ) -> FloatArray:
         """Position in the base frame [m] of a point fixed on a link.
 
-        Parameters
-        ----------
-        q : array-like of shape (n_dof,) or (n_samples, n_dof)
-            Joint positions [rad].
-        link : int or str
-            Link number (1-based) or joint name.
-        point : array-like of shape (3,)
-            Point in the link frame [m].
-
-        Returns
-        -------
-        ndarray of shape (3,) or (n_samples, 3)
+        See :func:`sensorless.robots.kinematics.forward_kinematics`.
         """
-        pose = self.link_pose(q, link)
-        p = self._point(point)
-        return np.asarray(pose[..., :3, :3] @ p + pose[..., :3, 3])
+        return kinematics.forward_kinematics(self, q, link, point)
 
     def point_jacobian(
         self, q: ArrayLike, link: int | str, point: ArrayLike = (0.0, 0.0, 0.0)
     ) -> FloatArray:
         """Geometric Jacobian of a point fixed on a link, in base-frame axes.
 
-        Rows 0–2 map q̇ to the point's linear velocity [m/s], rows 3–5 to the
-        link's angular velocity [rad/s]; so τ_c = Jᵀ [f; m] for a force f [N]
-        and moment m [N m] applied at the point, in base axes (eq. 5.34).
-
-        Parameters
-        ----------
-        q : array-like of shape (n_dof,) or (n_samples, n_dof)
-            Joint positions [rad].
-        link : int or str
-            Link number (1-based) or joint name.
-        point : array-like of shape (3,)
-            Point in the link frame [m].
-
-        Returns
-        -------
-        ndarray of shape (6, n_dof) or (n_samples, 6, n_dof)
+        See :func:`sensorless.robots.kinematics.point_jacobian`.
         """
-        jid = self.link_id(link)
-        p = self._point(point)
-        frame = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-
-        def jacobian(model: pin.Model, data: pin.Data, qk: FloatArray) -> FloatArray:
-            pin.computeJointJacobians(model, data, qk)
-            jac = pin.getJointJacobian(model, data, jid, frame)  # at the joint origin
-            linear, angular = jac[:3], jac[3:]
-            arm = data.oMi[jid].rotation @ p
-            return np.vstack([linear - np.cross(arm, angular.T).T, angular])
-
-        return self._per_sample(jacobian, (6, self.n_dof), (q, "q"))
-
-    @staticmethod
-    def _point(point: ArrayLike) -> FloatArray:
-        p = as_float_array(point, "point", "(3,)")
-        if p.shape != (3,) or not np.isfinite(p).all():
-            raise DimensionError(
-                f"point must be a finite 3-vector in the link frame [m]; got {point!r}"
-            )
-        return p
+        return kinematics.point_jacobian(self, q, link, point)
 
 
 def _coriolis_transpose_velocity(
@@ -612,24 +511,3 @@ def _coriolis_transpose_velocity(
 ) -> FloatArray:
     """C(q, q̇)ᵀ q̇ [N m] of one sample."""
     return np.asarray(pin.computeCoriolisMatrix(model, data, q, qd).T @ qd)
-
-
-def _regressor_terms(model: pin.Model, data: pin.Data, q: FloatArray) -> FloatArray:
-    """Split regressor of one sample (:meth:`RobotModel.regressor_terms`)."""
-    n = model.nv
-    upper_i, upper_j = np.triu_indices(n, 1)
-    eye = np.eye(n)
-    # Unit states that isolate each term: g, then q̈ = e_i, q̇ = e_i, q̇ = e_i + e_j.
-    velocities = np.vstack([np.zeros((1 + n, n)), eye, eye[upper_i] + eye[upper_j]])
-    accelerations = np.vstack([np.zeros((1, n)), eye, np.zeros((n + upper_i.size, n))])
-    samples = np.array(
-        [
-            standard_regressor(model, data, q, qd, qdd)
-            for qd, qdd in zip(velocities, accelerations, strict=True)
-        ]
-    )
-    y_g = samples[0]
-    y_m = samples[1 : n + 1] - y_g
-    y_c = samples[n + 1 : 2 * n + 1] - y_g
-    y_b = samples[2 * n + 1 :] - y_g - y_c[upper_i] - y_c[upper_j]
-    return np.concatenate([y_m, y_b, y_c, y_g[None]])

@@ -1,64 +1,13 @@
-"""Velocity and acceleration estimation from sampled joint positions.
+"""Causal velocity and acceleration estimators, usable in a control loop.
 
-Thesis § 3.4.1: the velocity and acceleration used by a model-based estimator
-are filtered estimates, and a causal filter always delays and low-passes the
-true signal. This module gives the usual estimators with their delay made
-explicit.
-
-Causal estimators (usable in a control loop)
-    :class:`FiniteDifference`, :class:`DirtyDerivative`, :class:`Butterworth`.
-Offline estimator (needs the whole record)
-    :class:`SavitzkyGolay`.
-
-Conventions
------------
-Units are SI and angles radians. Positions ``x`` have shape
-``(n_samples, n_dof)`` (time along axis 0) or ``(n_dof,)`` for one sample;
-results are :class:`Derivatives` ``(position, velocity, acceleration)`` in
-[rad], [rad/s], [rad/s²].
-
-Design is separate from application, as in :mod:`scipy.signal`: the
-constructor designs, once, three cascades of second-order sections acting on
-the raw position,
-
-    position     = sosfilt(sos_position, x)
-    velocity     = sosfilt(sos_velocity, x) / dt
-    acceleration = sosfilt(sos_acceleration, x) / dt**2
-
-where ``sos_velocity`` is one backward-difference section ``1 - z⁻¹`` followed
-by the estimator's low-pass, and ``sos_acceleration`` two of them followed by
-its low-pass. Putting the differences first, and on the raw position, makes a
-robot at rest give a velocity and an acceleration of exactly zero, and makes
-:class:`FiniteDifference` bit-for-bit ``np.diff(x, axis=0) / dt``.
-
-The filter state is an explicit, immutable :class:`FilterState` holding the
-``zi`` of :func:`scipy.signal.sosfilt` for the three cascades (shape
-``(n_sections, 2, n_dof)`` each). :meth:`CausalEstimator.initial_state` gives
-the state of a robot standing still at ``x0`` (no start-up transient);
-:meth:`CausalEstimator.step` (one sample) and :meth:`CausalEstimator.filter`
-(a whole array) run the same code, so a signal processed sample by sample or
-in chunks, carrying the returned state, gives the same result as in one go.
-
-Examples
---------
->>> import numpy as np
->>> from sensorless.filters import Butterworth
->>> dt = 1e-3
->>> t = np.arange(2000)[:, None] * dt
->>> q = np.hstack([np.sin(np.pi * t), 0.5 * t])          # two joints [rad]
->>> est = Butterworth(dt, cutoff=20.0)                    # 5th order, as in the thesis
->>> y, state = est.filter(q)
->>> y.velocity.shape
-(2000, 2)
->>> bool(np.allclose(y.velocity[-1, 1], 0.5))            # ramp of 0.5 rad/s
-True
->>> round(est.delay * 1e3, 1)                            # velocity delay [ms]
-26.2
+:class:`FiniteDifference`, :class:`DirtyDerivative` and :class:`Butterworth`
+share the streaming and batch code of :class:`CausalEstimator`; their state
+is an explicit, immutable :class:`FilterState`. Design and conventions:
+:mod:`sensorless.filters`.
 """
 
 from __future__ import annotations
 
-import operator
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
@@ -66,45 +15,21 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import signal
 
-from ._validation import FloatArray, as_joint_array, check_dt
-from .exceptions import DimensionError, InputTypeError, InputValueError
+from .._validation import FloatArray, as_joint_array, check_dt, check_int
+from ..exceptions import DimensionError, InputTypeError, InputValueError
+from ._derivatives import Derivatives, n_dof_of
+from ._sos import DIFFERENCE, IDENTITY, NO_SECTIONS, dc_group_delay, sections, sos_sample
 
 __all__ = [
     "Butterworth",
     "CausalEstimator",
     "Delays",
-    "Derivatives",
     "DirtyDerivative",
     "FilterState",
     "FiniteDifference",
-    "SavitzkyGolay",
 ]
 
-# Backward difference 1 - z⁻¹ as one second-order section; the 1/dt gain is
-# applied by division after filtering so that finite differences are exact.
-_DIFFERENCE = np.array([[1.0, -1.0, 0.0, 1.0, 0.0, 0.0]])
-_IDENTITY = np.array([[1.0, 0.0, 0.0, 1.0, 0.0, 0.0]])
-_NO_SECTIONS = np.empty((0, 6))
 _ALL_OUTPUTS = (True, True, True)
-
-
-class Derivatives(NamedTuple):
-    """Position and its first two time derivatives.
-
-    Attributes
-    ----------
-    position : ndarray of shape (n_samples, n_dof) or (n_dof,)
-        Joint positions [rad]: the filtered position where the estimator
-        filters it, otherwise the input.
-    velocity : ndarray of shape (n_samples, n_dof) or (n_dof,)
-        Estimated joint velocities [rad/s].
-    acceleration : ndarray of shape (n_samples, n_dof) or (n_dof,)
-        Estimated joint accelerations [rad/s²].
-    """
-
-    position: FloatArray
-    velocity: FloatArray
-    acceleration: FloatArray
 
 
 class Delays(NamedTuple):
@@ -184,32 +109,6 @@ def _check_cutoff(cutoff: Any, dt: float, owner: str) -> float:
     return value
 
 
-def _check_int(value: Any, name: str, minimum: int, owner: str) -> int:
-    if isinstance(value, (bool, np.bool_)):
-        index = None
-    else:
-        try:
-            index = operator.index(value)
-        except TypeError:
-            index = None
-    if index is None or index < minimum:
-        raise InputValueError(f"{owner}: {name} must be an integer >= {minimum}; got {value!r}")
-    return index
-
-
-def _n_dof_of(x: ArrayLike, name: str, ndim: int) -> int:
-    shape = np.shape(x)
-    expected = "(n_dof,)" if ndim == 1 else "(n_samples, n_dof)"
-    if len(shape) != ndim or shape[-1] < 1:
-        raise DimensionError(f"{name} must have shape {expected} with n_dof >= 1; got {shape}")
-    return int(shape[-1])
-
-
-def _dc_group_delay(sos: FloatArray) -> float:
-    """Group delay at DC [samples] of a cascade of sections without zeros at z = 1."""
-    return float(sum(signal.group_delay((sec[:3], sec[3:]), w=[0.0])[1][0] for sec in sos))
-
-
 class CausalEstimator:
     """Causal velocity/acceleration estimator: shared streaming and batch code.
 
@@ -235,13 +134,13 @@ class CausalEstimator:
         sos = []
         delays = []
         for order, filt in enumerate(lowpass):
-            cascade = np.vstack([_DIFFERENCE] * order + [filt])
+            cascade = np.vstack([DIFFERENCE] * order + [filt])
             # writable (sosfilt refuses a read-only sos); the properties hand out copies
-            sos.append(np.array(cascade if cascade.shape[0] else _IDENTITY))
-            delays.append(dt * (0.5 * order + _dc_group_delay(filt)))
+            sos.append(np.array(cascade if cascade.shape[0] else IDENTITY))
+            delays.append(dt * (0.5 * order + dc_group_delay(filt)))
         self._sos: tuple[FloatArray, ...] = tuple(sos)
         # The same coefficients as Python floats, for the per-sample recursion.
-        self._coefficients = tuple(_sections(s) for s in self._sos)
+        self._coefficients = tuple(sections(s) for s in self._sos)
         # sosfilt_zi scales each section by the DC gain of those before it, so
         # the sections after a difference start at exactly zero.
         self._zi_unit = tuple(_frozen(signal.sosfilt_zi(s)) for s in self._sos)
@@ -295,7 +194,7 @@ class CausalEstimator:
             Feeding ``x0`` again from this state gives position ``x0`` and
             exactly zero velocity and acceleration.
         """
-        n_dof = _n_dof_of(x0, "x0", ndim=1)
+        n_dof = n_dof_of(x0, "x0", ndim=1)
         arr, _ = as_joint_array(x0, n_dof, "x0")
         rest = arr[0]
         return FilterState(*(zi[:, :, None] * rest for zi in self._zi_unit))
@@ -350,7 +249,7 @@ class CausalEstimator:
         final = list(zis)
         for k in range(3):
             if which[k]:
-                y, final[k] = _sos_sample(self._coefficients[k], x, zis[k])
+                y, final[k] = sos_sample(self._coefficients[k], x, zis[k])
                 outputs[k] = y / self._scale[k]
         return (outputs[0], outputs[1], outputs[2]), (final[0], final[1], final[2])
 
@@ -376,7 +275,7 @@ class CausalEstimator:
             State after the last sample, to continue with the next chunk.
         """
         if state is None:
-            n_dof = _n_dof_of(x, "x", ndim=2)
+            n_dof = n_dof_of(x, "x", ndim=2)
             arr, _ = as_joint_array(x, n_dof, "x")
             if arr.shape[0] == 0:
                 raise DimensionError(
@@ -452,7 +351,7 @@ class FiniteDifference(CausalEstimator):
     __slots__ = ()
 
     def __init__(self, dt: float) -> None:
-        super().__init__(check_dt(dt), (_NO_SECTIONS, _NO_SECTIONS, _NO_SECTIONS))
+        super().__init__(check_dt(dt), (NO_SECTIONS, NO_SECTIONS, NO_SECTIONS))
 
 
 class DirtyDerivative(CausalEstimator):
@@ -489,7 +388,7 @@ class DirtyDerivative(CausalEstimator):
         tau = 1.0 / (2.0 * np.pi * self._cutoff)
         num, den, _ = signal.cont2discrete(([1.0, 0.0], [tau, 1.0]), dt, method="bilinear")
         section = np.array([[num[0, 0] * dt, 0.0, 0.0, 1.0, den[1], 0.0]])
-        super().__init__(dt, (_NO_SECTIONS, section, np.vstack([section, section])))
+        super().__init__(dt, (NO_SECTIONS, section, np.vstack([section, section])))
 
     @property
     def cutoff(self) -> float:
@@ -541,7 +440,7 @@ class Butterworth(CausalEstimator):
     def __init__(self, dt: float, cutoff: float, order: int = 5) -> None:
         dt = check_dt(dt)
         self._cutoff = _check_cutoff(cutoff, dt, "Butterworth")
-        self._order = _check_int(order, "order", 1, "Butterworth")
+        self._order = check_int(order, "order", 1, "Butterworth")
         lowpass = signal.butter(self._order, self._cutoff, btype="low", output="sos", fs=1.0 / dt)
         super().__init__(dt, (lowpass, lowpass, lowpass))
 
@@ -557,132 +456,3 @@ class Butterworth(CausalEstimator):
 
     def _params(self) -> str:
         return f"dt={self._dt!r}, cutoff={self._cutoff!r}, order={self._order}"
-
-
-class SavitzkyGolay:
-    """Savitzky–Golay smoothing and differentiation: non-causal, OFFLINE only.
-
-    Fits a polynomial of degree ``polyorder`` to each window of ``window``
-    samples centred on the sample (:func:`scipy.signal.savgol_filter`,
-    ``mode='interp'``: the first and last half-windows use the fit of the
-    first and last full window). It has no delay and is exact for polynomials
-    up to ``polyorder``, but it needs future samples: there is no
-    ``initial_state``/``step``, and it is not a :class:`CausalEstimator`.
-    Use it to make reference derivatives from a recorded log.
-
-    Parameters
-    ----------
-    dt : float
-        Sample period [s].
-    window : int
-        Window length [samples]; odd and > ``polyorder``.
-    polyorder : int
-        Degree of the fitted polynomial, >= 2 (the acceleration of a lower
-        degree fit is identically zero). Default 3.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> t = np.arange(50)[:, None] * 0.01
-    >>> y = SavitzkyGolay(0.01, window=11).filter(t**3)
-    >>> bool(np.allclose(y.velocity, 3 * t**2)), bool(np.allclose(y.acceleration, 6 * t))
-    (True, True)
-    """
-
-    __slots__ = ("_dt", "_polyorder", "_window")
-
-    def __init__(self, dt: float, window: int, polyorder: int = 3) -> None:
-        self._dt = check_dt(dt)
-        self._polyorder = _check_int(polyorder, "polyorder", 2, "SavitzkyGolay")
-        self._window = _check_int(window, "window", self._polyorder + 1, "SavitzkyGolay")
-        if self._window % 2 == 0:
-            raise InputValueError(
-                f"SavitzkyGolay: window must be an odd number of samples > polyorder "
-                f"({self._polyorder}); got {window!r}"
-            )
-
-    @property
-    def dt(self) -> float:
-        """Sample period [s]."""
-        return self._dt
-
-    @property
-    def window(self) -> int:
-        """Window length [samples]."""
-        return self._window
-
-    @property
-    def polyorder(self) -> int:
-        """Degree of the fitted polynomial."""
-        return self._polyorder
-
-    def filter(self, x: ArrayLike) -> Derivatives:
-        """Smooth and differentiate a whole record.
-
-        Parameters
-        ----------
-        x : array-like of shape (n_samples, n_dof)
-            Joint positions [rad], time along axis 0, ``n_samples >= window``.
-
-        Returns
-        -------
-        Derivatives
-            Smoothed position [rad], velocity [rad/s], acceleration [rad/s²],
-            each of shape (n_samples, n_dof).
-        """
-        n_dof = _n_dof_of(x, "x", ndim=2)
-        arr, _ = as_joint_array(x, n_dof, "x")
-        if arr.shape[0] < self._window:
-            raise DimensionError(
-                f"SavitzkyGolay(window={self._window}) needs at least {self._window} samples; "
-                f"x has {arr.shape[0]}"
-            )
-        return Derivatives(
-            *(
-                signal.savgol_filter(
-                    arr,
-                    self._window,
-                    self._polyorder,
-                    deriv=deriv,
-                    delta=self._dt,
-                    axis=0,
-                    mode="interp",
-                )
-                for deriv in range(3)
-            )
-        )
-
-    def __repr__(self) -> str:
-        return f"SavitzkyGolay(dt={self._dt!r}, window={self._window}, polyorder={self._polyorder})"
-
-
-_Section = tuple[float, float, float, float, float, float]
-
-
-def _sections(sos: FloatArray) -> tuple[_Section, ...]:
-    """Rows of ``sos`` as tuples of Python floats (same values, cheaper to unpack)."""
-    return tuple(
-        (float(b0), float(b1), float(b2), float(a0), float(a1), float(a2))
-        for b0, b1, b2, a0, a1, a2 in sos
-    )
-
-
-def _sos_sample(
-    sos: tuple[_Section, ...], x: FloatArray, zi: FloatArray
-) -> tuple[FloatArray, FloatArray]:
-    """One sample through second-order sections, transposed direct form II.
-
-    The recursion :func:`scipy.signal.sosfilt` runs, written out for a single
-    sample: calling sosfilt on one row costs far more than the arithmetic
-    (axis handling and validation), and a live detector calls this at 1 kHz.
-    ``sos`` holds the sections as float tuples (see :func:`_sections`);
-    ``zi`` has shape (n_sections, 2, n_dof); a new state array is returned.
-    """
-    zf = np.empty_like(zi)
-    y = x
-    for k, (b0, b1, b2, _, a1, a2) in enumerate(sos):
-        out = b0 * y + zi[k, 0]
-        zf[k, 0] = b1 * y - a1 * out + zi[k, 1]
-        zf[k, 1] = b2 * y - a2 * out
-        y = out
-    return y, zf

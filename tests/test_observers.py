@@ -356,6 +356,23 @@ def test_observe_filter_and_acceleration_kinds(puma: dict[str, Any]) -> None:
     np.testing.assert_array_equal(joint.residual, motor.residual)
 
 
+def test_observe_uses_a_measured_velocity_when_the_log_has_one(puma: dict[str, Any]) -> None:
+    robot, log = puma["robot"], puma["hit"].log.slice(0.0, 2.0)
+    measured = Log(t=log.t, q=log.q, qd=log.qd_true, tau_m=log.tau_m, metadata=log.metadata)
+    auto = observe(measured, robot)
+    assert auto.metadata["observer"]["velocity"] == "measured"
+    np.testing.assert_array_equal(auto.velocity, log.qd_true)
+    truth = observe(log, robot, velocity="true")
+    np.testing.assert_array_equal(auto.residual, truth.residual)
+    estimated = observe(measured, robot, velocity="filter")
+    assert estimated.metadata["observer"]["velocity"] == "filter"
+    assert observe(log, robot).metadata["observer"]["velocity"] == "filter"  # no qd: estimate
+    with pytest.raises(LogFormatError, match="velocity='measured' needs the measured"):
+        observe(log, robot, velocity="measured")
+    with pytest.raises(InputValueError, match="velocity='measured' applies to the momentum"):
+        observe(measured, robot, kind="acceleration", velocity="measured")
+
+
 def test_default_estimator() -> None:
     assert isinstance(default_estimator(1e-3), FiniteDifference)
     slow = default_estimator(0.05, "acceleration")
@@ -382,8 +399,8 @@ def test_observe_errors() -> None:
         observe(_log(7, tau_m=1.0), panda, velocity="true")
     with pytest.raises(InputValueError, match=r"\['motor', 'joint', 'acceleration'\]"):
         observe(_log(7, tau_m=1.0), panda, kind="torque")
-    with pytest.raises(InputValueError, match=r"\['filter', 'true'\]"):
-        observe(_log(7, tau_m=1.0), panda, velocity="measured")
+    with pytest.raises(InputValueError, match=r"\['auto', 'measured', 'filter', 'true'\]"):
+        observe(_log(7, tau_m=1.0), panda, velocity="sensor")
     with pytest.raises(InputValueError, match="velocity='filter'"):
         observe(_log(7, tau_m=1.0, qd_true=0.0), panda, kind="acceleration", velocity="true")
     with pytest.raises(InputValueError, match=r"estimator has dt = 0\.002"):

@@ -24,7 +24,7 @@ TORQUE_KINDS: tuple[str, ...] = ("motor", "joint")
 OBSERVER_KINDS: tuple[str, ...] = ("motor", "joint", "acceleration")
 """Observers :func:`observe` can run."""
 
-VELOCITY_SOURCES: tuple[str, ...] = ("filter", "true")
+VELOCITY_SOURCES: tuple[str, ...] = ("auto", "measured", "filter", "true")
 """Where :func:`observe` takes the joint velocity from."""
 
 # Relative tolerance on the sample period of a time column (that of sensorless.io).

@@ -94,7 +94,7 @@ def observe(
     *,
     kind: str = "motor",
     gain: ArrayLike = 20.0,
-    velocity: str = "filter",
+    velocity: str = "auto",
     estimator: CausalEstimator | None = None,
     friction: Any = "model",
 ) -> ObserverSignals:
@@ -111,11 +111,14 @@ def observe(
         from ``log.tau_j``; ``"acceleration"``: τ̂_c (eq. 3.16) from ``log.tau_m``.
     gain : float or array-like of shape (n_dof,)
         K_I [1/s] of the momentum observers (ignored by ``"acceleration"``).
-    velocity : {"filter", "true"}
-        Joint velocity of the momentum observers: ``"filter"`` estimates it
-        from ``log.q`` with ``estimator``; ``"true"`` uses the ground truth
-        ``log.qd_true`` (simulated logs; ideal studies and tests). The
-        acceleration-based estimate always uses ``estimator``.
+    velocity : {"auto", "measured", "filter", "true"}
+        Joint velocity of the momentum observers: ``"measured"`` is the
+        recorded ``log.qd`` (real arms log it); ``"filter"`` estimates it from
+        ``log.q`` with ``estimator``; ``"auto"`` takes ``log.qd`` when the log
+        has it and the estimate otherwise; ``"true"`` uses the simulator's
+        ground truth ``log.qd_true`` (ideal studies and tests). The choice is
+        recorded in ``metadata["observer"]["velocity"]``. The acceleration-based
+        estimate always uses ``estimator``.
     estimator : CausalEstimator, optional
         Causal velocity/acceleration estimator with ``dt`` = the log's period;
         default :func:`default_estimator` (backward differences for the momentum
@@ -148,14 +151,21 @@ def observe(
     kind = _check_observer_kind(kind)
     if velocity not in VELOCITY_SOURCES:
         raise InputValueError(
-            f"velocity must be one of {list(VELOCITY_SOURCES)} (estimate it from q, or the "
-            f"ground-truth qd_true); got {velocity!r}"
+            f"velocity must be one of {list(VELOCITY_SOURCES)} (the log's measured qd, an "
+            f"estimate from q, or the ground-truth qd_true); got {velocity!r}"
         )
-    if kind == "acceleration" and velocity == "true":
+    if kind == "acceleration" and velocity in ("true", "measured"):
         raise InputValueError(
-            "velocity='true' applies to the momentum observers (kind 'motor' or 'joint'); "
-            "the acceleration-based estimate takes velocity and acceleration from q with "
-            "its estimator: use velocity='filter'"
+            f"velocity={velocity!r} applies to the momentum observers (kind 'motor' or "
+            "'joint'); the acceleration-based estimate takes velocity and acceleration from "
+            "q with its estimator: use velocity='filter'"
+        )
+    if velocity == "auto":
+        velocity = "measured" if kind != "acceleration" and log.qd is not None else "filter"
+    if velocity == "measured" and log.qd is None:
+        raise LogFormatError(
+            f"velocity='measured' needs the measured velocities qd_1..qd_{log.n_dof}; the "
+            f"log has none (present groups: {log.groups}). Use velocity='filter'"
         )
     tau = _log_torque(log, kind)
     dt = log.dt
@@ -189,6 +199,8 @@ def observe(
                     "velocity='filter'"
                 )
             qd = np.asarray(log.qd_true)
+        elif velocity == "measured":
+            qd = np.asarray(log.qd)
         else:
             assert estimator is not None  # set above
             qd = estimator.filter(log.q)[0].velocity

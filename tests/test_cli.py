@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import copy
 
+import pytest
 import yaml
 from typer.testing import CliRunner
 
 from sensorless.cli import app
-from sensorless.io import read_log
+from sensorless.io import Log, read_log, write_log
 from sensorless.simulation.scenario import load_scenario
 
 runner = CliRunner()
@@ -154,3 +155,67 @@ def test_identify_inertial_and_excite(tmp_path) -> None:
     )
     assert result.exit_code == 0, result.output
     assert yaml.safe_load(trajectory.read_text())["trajectory"]["type"] == "fourier"
+
+
+# --------------------------------------------------------------------- a user's mistakes
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("cli")
+    spec = copy.deepcopy(load_scenario("panda-gaz").spec)
+    spec["duration"] = 1.0
+    spec.pop("random_collisions")
+    scenario = folder / "tiny.yaml"
+    scenario.write_text(yaml.safe_dump(spec))
+    log = folder / "free.parquet"
+    assert runner.invoke(app, ["simulate", str(scenario), "-o", str(log)]).exit_code == 0
+    thresholds = folder / "th.yaml"
+    result = runner.invoke(app, ["tune", "--method", "constant", str(log), "-o", str(thresholds)])
+    assert result.exit_code == 0, result.output
+    corrupt = folder / "corrupt.yaml"
+    corrupt.write_text("method: [constant\n  robot: {")
+    return {"scenario": scenario, "log": log, "thresholds": thresholds, "corrupt": corrupt}
+
+
+CASES = [
+    # (arguments, exit code, what stderr must say)
+    (["detect", "{missing}", "--thresholds", "{thresholds}"], 3, "does not exist"),
+    (["detect", "{log}", "--thresholds", "{missing}"], 3, "No such file"),
+    (["tune", "--method", "constant", "{missing}"], 3, "does not exist"),
+    (["detect", "{log}", "--thresholds", "{corrupt}"], 4, "is not a threshold file"),
+    (["detect", "{log}", "--thresholds", "{log}"], 4, "is not a threshold file"),
+    (["simulate", "{scenario}", "-o", "{folder}"], 2, "is a folder"),
+    (["simulate", "{scenario}", "-o", "/dev/null/run.parquet"], 3, "/dev/null"),
+    (["simulate", "{scenario}", "-o", "{folder}/run.txt"], 2, "must end in one of"),
+    (["simulate", "{scenario}", "--seed", "-1"], 2, "--seed"),
+    (["excite", "--robot", "panda", "--harmonics", "200"], 2, "--harmonics"),
+    (["tune", "--method", "magic", "{log}"], 2, "unknown threshold method 'magic'"),
+]
+
+
+@pytest.mark.parametrize(("arguments", "code", "says"), CASES)
+def test_a_mistake_is_one_line_on_stderr(files, tmp_path, arguments, code, says) -> None:
+    paths = {**{k: str(v) for k, v in files.items()}, "missing": str(tmp_path / "nope.parquet")}
+    paths["folder"] = str(tmp_path)
+    result = runner.invoke(app, [a.format(**paths) for a in arguments])
+    assert result.exit_code == code, (result.exit_code, result.output)
+    assert "Traceback" not in result.output
+    assert says in result.stderr
+    if says not in ("--seed", "--harmonics"):  # click's own usage errors print a short box
+        assert len(result.stderr.strip().splitlines()) == 1, result.stderr
+
+
+def test_debug_shows_the_traceback(files, tmp_path) -> None:
+    missing = str(tmp_path / "nope.parquet")
+    result = runner.invoke(app, ["--debug", "detect", missing, "--thresholds", missing])
+    assert isinstance(result.exception, FileNotFoundError)
+
+
+def test_detect_reports_the_spans_it_refused(files, tmp_path) -> None:
+    frame = read_log(files["log"]).to_pandas()
+    frame.loc[(frame["t"] > 0.5) & (frame["t"] < 0.6), "tau_m_2"] = 1e6
+    broken = tmp_path / "broken.parquet"
+    write_log(Log.from_pandas(frame, metadata=read_log(files["log"]).metadata), broken)
+    result = runner.invoke(app, ["detect", str(broken), "--thresholds", str(files["thresholds"])])
+    assert result.exit_code == 0, result.output
+    assert "1 span(s) refused as faults" in result.output
+    assert "tau_m of joint 2 is 1e+06 N m" in result.output

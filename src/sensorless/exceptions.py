@@ -12,6 +12,7 @@ from __future__ import annotations
 
 __all__ = [
     "DimensionError",
+    "FileFormatError",
     "InputTypeError",
     "InputValueError",
     "LogFormatError",
@@ -53,5 +54,9 @@ class NotFittedError(SensorlessError, ValueError):
     """An estimator (threshold, identification) is used before ``fit``."""
 
 
-class LogFormatError(SensorlessError, ValueError):
+class FileFormatError(SensorlessError, ValueError):
+    """A file (log, thresholds, scenario) cannot be read as what it should be."""
+
+
+class LogFormatError(FileFormatError):
     """A log file or table does not have the expected columns, time base or values."""

@@ -17,7 +17,7 @@ import numpy as np
 import yaml
 
 from .._validation import check_dt
-from ..exceptions import InputTypeError, InputValueError, UnknownNameError
+from ..exceptions import FileFormatError, InputTypeError, InputValueError, UnknownNameError
 from ..filters import Butterworth, CausalEstimator, DirtyDerivative, FiniteDifference
 from ..io import Log
 from ..observers import default_estimator, observe
@@ -213,11 +213,20 @@ def save_tuned(path: str | Path, threshold: Threshold, settings: ObserverSetting
 
 def load_tuned(path: str | Path) -> tuple[Threshold, ObserverSettings]:
     """Read a file written by :func:`save_tuned` (or a bare threshold file: default settings)."""
-    data = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+    try:
+        data = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, yaml.YAMLError) as exc:
+        reason = "not a text file" if isinstance(exc, UnicodeDecodeError) else "not valid YAML"
+        raise FileFormatError(
+            f"{path} is not a threshold file ({reason}); give a file written by `tune`"
+        ) from None
     if not isinstance(data, dict):
-        raise InputValueError(f"{path} is not a threshold file (expected a YAML mapping)")
+        raise FileFormatError(f"{path} is not a threshold file (expected a YAML mapping)")
     settings_data = data.pop("observer", None)
-    threshold = Threshold.from_dict(data)
+    try:
+        threshold = Threshold.from_dict(data)
+    except (InputValueError, InputTypeError) as exc:
+        raise FileFormatError(f"{path}: {exc}") from None
     if settings_data is None:
         settings = ObserverSettings(kind=threshold.kind_, gain=float(threshold.gain_[0]))
     else:

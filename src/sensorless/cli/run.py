@@ -1,0 +1,187 @@
+"""Commands over logs: list robots and scenarios, simulate, tune, detect, evaluate."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+from rich.table import Table
+
+from .. import robots as robot_registry
+from ..detection import events_to_pandas
+from ..evaluation import comparison_table, evaluate, summary_table
+from ..io import Log, read_log, write_log
+from ..monitor import (
+    METHOD_NAMES,
+    CollisionMonitor,
+    MonitorRun,
+    ObserverSettings,
+    load_tuned,
+    save_tuned,
+    tune,
+)
+from ..robots.base_parameters import base_parameters
+from ..simulation.scenario import available_scenarios, load_scenario
+from ._common import console, nominal_robot, output_path, print_table, run_with_progress
+
+__all__ = [
+    "detect_command",
+    "evaluate_command",
+    "robot_summary",
+    "robots_command",
+    "scenarios_command",
+    "simulate_command",
+    "tune_command",
+]
+
+
+def robot_summary() -> Table:
+    """Table of the built-in robots: joints, base parameters and a dynamics check."""
+    table = Table(title="Built-in robots")
+    for column in ("robot", "joints", "standard params", "base params", "max |Yπ − RNEA| [N m]"):
+        table.add_column(column, justify="right" if column != "robot" else "left")
+    rng = np.random.default_rng(0)
+    for name in robot_registry.available():
+        robot = robot_registry.load(name)
+        bp = base_parameters(robot)
+        shape = (20, robot.n_dof)
+        q, qd, qdd = (
+            rng.uniform(-2, 2, shape),
+            rng.standard_normal(shape),
+            rng.standard_normal(shape),
+        )
+        error = np.abs(
+            bp.regressor(q, qd, qdd) @ bp.values - robot.inverse_dynamics(q, qd, qdd)
+        ).max()
+        table.add_row(
+            name, str(robot.n_dof), str(len(robot.parameter_names())), str(bp.count), f"{error:.1e}"
+        )
+    return table
+
+
+def robots_command() -> None:
+    """Summarise the built-in robots (joints, base-parameter count, Yπ = RNEA check)."""
+    console.print(robot_summary())
+
+
+def scenarios_command() -> None:
+    """List the shipped simulation scenarios."""
+    table = Table(title="Shipped scenarios")
+    table.add_column("name")
+    table.add_column("duration [s]", justify="right")
+    table.add_column("description")
+    for name in available_scenarios():
+        scenario = load_scenario(name)
+        table.add_row(
+            name,
+            f"{scenario.duration:g}",
+            " ".join(str(scenario.spec.get("description", "")).split()),
+        )
+    console.print(table)
+
+
+def simulate_command(
+    scenario: Annotated[str, typer.Argument(help="Shipped scenario name or path of a YAML file.")],
+    output: Annotated[
+        Path, typer.Option("-o", "--output", help="Log file (.parquet or .csv).")
+    ] = Path("run.parquet"),
+    seed: Annotated[
+        int | None, typer.Option("--seed", min=0, help="Run seed (default: the scenario's).")
+    ] = None,
+    collisions: Annotated[
+        bool, typer.Option("--collisions/--no-collisions", help="Include the contacts.")
+    ] = True,
+) -> None:
+    """Simulate a scenario and write its labelled log."""
+    spec = load_scenario(scenario)
+    output_path(output, suffixes=(".parquet", ".pq", ".csv"))
+    result = run_with_progress(
+        f"simulating {spec.name}",
+        lambda report: spec.run(seed=seed, collisions=collisions, progress=report),
+    )
+    path = write_log(result.log, output)
+    console.print(
+        f"wrote {path} ({result.log.n_samples} samples, {result.substeps} RK4 substeps per period)"
+    )
+
+
+def tune_command(
+    logs: Annotated[list[Path], typer.Argument(help="Collision-free logs.")],
+    method: Annotated[
+        str, typer.Option("--method", help="constant, time-variant, hysteretic, velocity or model.")
+    ],
+    output: Annotated[Path, typer.Option("-o", "--output", help="Thresholds file (YAML).")] = Path(
+        "thresholds.yaml"
+    ),
+    robot: Annotated[
+        str | None, typer.Option("--robot", help="Nominal model (default: the log's scenario).")
+    ] = None,
+    gain: Annotated[float, typer.Option("--gain", help="Observer gain K_I [1/s].")] = 20.0,
+    kind: Annotated[
+        str | None, typer.Option("--kind", help="motor or joint (momentum methods).")
+    ] = None,
+    margin: Annotated[
+        float, typer.Option("--margin", help="Margin added to the bounds [N m].")
+    ] = 0.0,
+) -> None:
+    """Fit a threshold family on collision-free logs and save it with its observer settings."""
+    output_path(output, suffixes=(".yaml", ".yml"))
+    runs = [read_log(path) for path in logs]
+    settings = ObserverSettings(kind=kind or METHOD_NAMES.get(method, "motor"), gain=gain)
+    nominal = nominal_robot(robot, runs[0], settings.kind)
+    threshold, settings = tune(runs, nominal, method, settings, margin=margin)
+    path = save_tuned(output, threshold, settings)
+    console.print(f"wrote {path}: {threshold!r} fitted on {len(runs)} log(s) of {nominal.name}")
+
+
+def _detect(log_path: Path, thresholds: Path, robot: str | None) -> tuple[Log, str, MonitorRun]:
+    log = read_log(log_path)
+    threshold, settings = load_tuned(thresholds)
+    monitor = CollisionMonitor(nominal_robot(robot, log, settings.kind), threshold, settings)
+    return log, threshold.name, monitor.process(log)
+
+
+def _print_faults(result: MonitorRun) -> None:
+    if result.faults:
+        console.print(
+            f"{len(result.faults)} span(s) refused as faults (the monitor restarted after each):"
+        )
+        print_table(result.faults_to_pandas())
+
+
+def detect_command(
+    log: Annotated[Path, typer.Argument(help="Log to check.")],
+    thresholds: Annotated[Path, typer.Option("--thresholds", help="File written by `tune`.")],
+    robot: Annotated[
+        str | None, typer.Option("--robot", help="Nominal model (default: the log's scenario).")
+    ] = None,
+) -> None:
+    """Detect collisions in a log and print the events."""
+    _, method, result = _detect(log, thresholds, robot)
+    _print_faults(result)
+    console.print(f"{len(result.events)} event(s) detected by {method}")
+    if result.events:
+        print_table(events_to_pandas(result.events))
+
+
+def evaluate_command(
+    logs: Annotated[list[Path], typer.Argument(help="Logs with ground truth (collision ids).")],
+    thresholds: Annotated[
+        list[Path], typer.Option("--thresholds", help="Files written by `tune`.")
+    ],
+    robot: Annotated[
+        str | None, typer.Option("--robot", help="Nominal model (default: the log's scenario).")
+    ] = None,
+) -> None:
+    """Evaluate thresholds on labelled logs: detections, delays, false alarms."""
+    for log_path in logs:
+        evaluations = {}
+        for path in thresholds:
+            log, method, result = _detect(log_path, path, robot)
+            _print_faults(result)
+            evaluations[f"{method} ({path.name})"] = evaluate(result.events, log, method=method)
+        console.print(f"[bold]{log_path}[/]")
+        print_table(summary_table(evaluations))
+        print_table(comparison_table(evaluations))

@@ -290,7 +290,7 @@ def test_load_excitation_rejects_bad_files(tmp_path: Path) -> None:
         (
             {"position_limits": ([0.0, 0.0, 0.0], 1.0)},
             DimensionError,
-            r"position_limits lower must be a number or have shape \(2,\)",
+            r"position_limits lower must be a scalar or have shape \(2,\)",
         ),
         (
             {"velocity_limits": None},
@@ -307,7 +307,7 @@ def test_load_excitation_rejects_bad_files(tmp_path: Path) -> None:
         (
             {"acceleration_limits": [1.0, 1.0, 1.0]},
             DimensionError,
-            r"acceleration_limits must be a number or have shape \(2,\)",
+            r"acceleration_limits must be a scalar or have shape \(2,\)",
         ),
         ({"acceleration_limits": 0.0}, InputValueError, "acceleration_limits must be positive"),
         ({"zero": ["mY1"], "base": "use"}, InputValueError, "zero=.* applies only without base"),

@@ -8,13 +8,14 @@ is positive and finite.
 
 from __future__ import annotations
 
+import math
 import operator
-from typing import Any, Literal
+from typing import Any, Literal, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .exceptions import DimensionError, InputValueError
+from .exceptions import DimensionError, InputTypeError, InputValueError
 
 FloatArray = NDArray[np.float64]
 
@@ -24,12 +25,18 @@ __all__ = [
     "as_joint_array",
     "as_sample",
     "check_dt",
+    "check_duration",
     "check_finite",
     "check_increasing",
     "check_int",
     "check_scalar",
+    "check_type",
+    "first_irregular_step",
+    "joint_parameter",
     "per_joint",
 ]
+
+T = TypeVar("T")
 
 Sign = Literal["any", "nonnegative", "positive"]
 _SIGN_TEXT = {"any": "", "nonnegative": " >= 0", "positive": " > 0"}
@@ -91,12 +98,32 @@ def as_joint_array(
 
 def check_dt(dt: Any, name: str = "dt") -> float:
     """Return the sample period ``dt`` [s] as a float after checking it is positive and finite."""
+    return _number(dt, name, "a positive, finite number of seconds", "positive")
+
+
+def check_duration(value: Any, name: str) -> float:
+    """Return a duration [s] (a transient, a hold time) as a float after checking it is >= 0."""
+    return _number(value, name, "a finite number of seconds >= 0", "nonnegative")
+
+
+def _number(value: Any, name: str, wanted: str, sign: Sign) -> float:
+    """``value`` as a finite float of the required sign; bools are refused."""
     try:
-        value = float(dt)
+        number = math.nan if isinstance(value, (bool, np.bool_)) else float(value)
     except (TypeError, ValueError):
-        raise InputValueError(f"{name} must be a positive number of seconds; got {dt!r}") from None
-    if not np.isfinite(value) or value <= 0.0:
-        raise InputValueError(f"{name} must be a positive, finite number of seconds; got {dt!r}")
+        number = math.nan
+    if not np.isfinite(number) or not _sign_ok(np.array([number]), sign):
+        raise InputValueError(f"{name} must be {wanted}; got {value!r}")
+    return number
+
+
+def check_type(value: Any, kind: type[T], name: str, hint: str = "") -> T:
+    """Return ``value`` if it is a ``kind``; else :class:`InputTypeError` naming what came.
+
+    ``hint`` follows the expected type in the message, e.g. where to get one.
+    """
+    if not isinstance(value, kind):
+        raise InputTypeError(f"{name} must be a {kind.__name__}{hint}; got {type(value).__name__}")
     return value
 
 
@@ -130,16 +157,7 @@ def check_scalar(value: Any, name: str, unit: str, sign: Sign = "positive") -> f
     sign : {"positive", "nonnegative", "any"}
         Required sign.
     """
-    wanted = f"a finite number{_SIGN_TEXT[sign]} [{unit}]"
-    if isinstance(value, (bool, np.bool_)):
-        raise InputValueError(f"{name} must be {wanted}; got {value!r}")
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        raise InputValueError(f"{name} must be {wanted}; got {value!r}") from None
-    if not np.isfinite(number) or not _sign_ok(np.array([number]), sign):
-        raise InputValueError(f"{name} must be {wanted}; got {value!r}")
-    return number
+    return _number(value, name, f"a finite number{_SIGN_TEXT[sign]} [{unit}]", sign)
 
 
 def check_int(value: Any, name: str, minimum: int, owner: str = "") -> int:
@@ -158,7 +176,9 @@ def check_int(value: Any, name: str, minimum: int, owner: str = "") -> int:
     return index
 
 
-def per_joint(value: Any, n_dof: int, name: str, unit: str, sign: Sign = "any") -> FloatArray:
+def per_joint(
+    value: Any, n_dof: int, name: str, unit: str, sign: Sign = "any", *, allow_inf: bool = False
+) -> FloatArray:
     """Broadcast a scalar or an array of shape ``(n_dof,)`` to a finite array of shape ``(n_dof,)``.
 
     Parameters
@@ -171,6 +191,8 @@ def per_joint(value: Any, n_dof: int, name: str, unit: str, sign: Sign = "any") 
         Used in error messages.
     sign : {"any", "nonnegative", "positive"}
         Required sign of every entry.
+    allow_inf : bool
+        Accept ``-inf``/``+inf`` (e.g. "no limit"); NaN is refused all the same.
 
     Returns
     -------
@@ -189,9 +211,32 @@ def per_joint(value: Any, n_dof: int, name: str, unit: str, sign: Sign = "any") 
             f"{name} must be a scalar or have shape ({n_dof},) for {n_dof} joints; "
             f"got shape {arr.shape}"
         )
-    if not np.isfinite(arr).all() or not _sign_ok(arr, sign):
-        wanted = f"finite and{_SIGN_TEXT[sign]}" if sign != "any" else "finite"
+    if allow_inf and np.isnan(arr).any():
+        raise InputValueError(f"{name} must not contain NaN [{unit}]; got {value!r}")
+    if not (allow_inf or np.isfinite(arr).all()) or not _sign_ok(arr, sign):
+        finite = "" if allow_inf else "finite and"
+        wanted = f"{finite}{_SIGN_TEXT[sign]}".strip() if sign != "any" else "finite"
         raise InputValueError(f"{name} must be {wanted} [{unit}]; got {value!r}")
+    return arr
+
+
+def joint_parameter(value: Any, name: str) -> FloatArray:
+    """A finite scalar or non-empty array of shape ``(n_dof,)`` before ``n_dof`` is known.
+
+    For models whose number of joints follows from their parameters (friction,
+    sensors). Returns a new float array of ndim 0 or 1.
+    """
+    try:
+        arr = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputValueError(
+            f"{name} must be a number or an array of shape (n_dof,); got {value!r}"
+        ) from None
+    if arr.ndim > 1 or arr.size == 0:
+        raise DimensionError(
+            f"{name} must be a scalar or a non-empty array of shape (n_dof,); got shape {arr.shape}"
+        )
+    check_finite(np.atleast_1d(arr), name)
     return arr
 
 
@@ -205,6 +250,19 @@ def check_increasing(t: FloatArray, what: str) -> None:
             f"t of {what} must be strictly increasing; t[{k}] = {t[k]!r} s follows "
             f"t[{k - 1}] = {t[k - 1]!r} s"
         )
+
+
+def first_irregular_step(t: FloatArray, period: float, rtol: float) -> int | None:
+    """Index ``k`` of the first step ``t[k+1] - t[k]`` [s] that is not ``period`` within ``rtol``.
+
+    None when every step is regular (or ``t`` has fewer than two samples).
+    """
+    step = np.diff(t)
+    # Time stamps far from zero (e.g. Unix time) carry rounding of their own spacing; a
+    # few ulps of the largest stamp are not jitter.
+    tolerance = rtol * period + 4.0 * float(np.spacing(max(abs(t[0]), abs(t[-1]))))
+    bad = np.flatnonzero(np.abs(step - period) > tolerance)
+    return int(bad[0]) if bad.size else None
 
 
 def as_sample(x: Any, n_dof: int, name: str) -> tuple[FloatArray, str]:

@@ -45,6 +45,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -53,11 +54,11 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
-from ._validation import FloatArray, check_dt
+from ._validation import FloatArray, check_dt, check_duration
 from .exceptions import InputTypeError, InputValueError
 from .signals import Event, ObserverSignals
 from .thresholds.base import Threshold
-from .thresholds.checks import as_inputs, as_samples, check_joints, check_seconds
+from .thresholds.checks import as_inputs, as_samples, check_joints
 from .thresholds.state import ThresholdInputs, ThresholdState
 
 __all__ = [
@@ -75,25 +76,11 @@ _EVENT_COLUMNS = ["start", "end", "duration", "joints", "peak", "peak_residual",
 _STREAM_INPUTS = ("residual", "model_torque", "friction", "sign", "velocity")
 
 
-@dataclass(frozen=True)
-class _OpenEvent:
-    """An event that may still grow: times [s], 1-based joints, peak excursion [N m]."""
-
-    start: float
-    end: float
-    joints: tuple[int, ...]
-    peak: float
-    peak_residual: float
-
-    def merged(self, later: _OpenEvent) -> _OpenEvent:
-        keep_peak = later.peak <= self.peak
-        return _OpenEvent(
-            start=self.start,
-            end=later.end,
-            joints=tuple(sorted(set(self.joints) | set(later.joints))),
-            peak=self.peak if keep_peak else later.peak,
-            peak_residual=self.peak_residual if keep_peak else later.peak_residual,
-        )
+def _merged(earlier: Event, later: Event) -> Event:
+    """One event from ``earlier`` to ``later``: joints of both, the larger peak (first if equal)."""
+    peak = earlier if later.peak <= earlier.peak else later
+    joints = tuple(sorted(set(earlier.joints) | set(later.joints)))
+    return dataclasses.replace(peak, start=earlier.start, end=later.end, joints=joints)
 
 
 @dataclass(frozen=True, eq=False)
@@ -135,27 +122,30 @@ class Verdict:
 
 @dataclass(frozen=True, eq=False)
 class DetectorState:
-    """Streaming state of a :class:`Detector`; obtain it from :meth:`Detector.initial_state`.
+    """What a :class:`Detector` carries from one sample of a stream to the next.
+
+    :meth:`Detector.initial_state` gives the first one, :meth:`Detector.step`
+    and :meth:`Detector.finish` the next.
 
     Attributes
     ----------
     dt : float
-        Sample period of the stream [s].
+        Sample period of the stream [s], with which the threshold's state starts.
     threshold : ThresholdState or None
         State of the threshold; None until the first accepted sample.
     t : float
         Time of the last accepted sample [s] (``-inf`` before any).
     outside : bool
         Whether the last accepted sample was outside its bounds.
-    open_event : object or None
-        The event in progress (possibly in its ``hold`` gap).
+    open_event : Event or None
+        The event in progress (possibly in its ``hold`` gap), without ``method`` yet.
     """
 
     dt: float
     threshold: ThresholdState | None = None
     t: float = -math.inf
     outside: bool = False
-    open_event: _OpenEvent | None = None
+    open_event: Event | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -254,8 +244,8 @@ class Detector:
             )
         self.threshold = threshold
         self.joints = joints
-        self.min_duration = check_seconds(min_duration, "min_duration")
-        self.hold = check_seconds(hold, "hold")
+        self.min_duration = check_duration(min_duration, "min_duration")
+        self.hold = check_duration(hold, "hold")
 
     def __repr__(self) -> str:
         return (
@@ -271,17 +261,10 @@ class Detector:
 
     # ----------------------------------------------------------------- events
 
-    def _close(self, event: _OpenEvent | None) -> Event | None:
-        if event is None or event.end - event.start < self.min_duration:
+    def _close(self, event: Event | None) -> Event | None:
+        if event is None or event.duration < self.min_duration:
             return None
-        return Event(
-            start=event.start,
-            end=event.end,
-            joints=event.joints,
-            peak=event.peak,
-            peak_residual=event.peak_residual,
-            method=self.threshold.name,
-        )
+        return dataclasses.replace(event, method=self.threshold.name)
 
     def _group(
         self, t: FloatArray, excursion: FloatArray, residual: FloatArray, monitored: tuple[int, ...]
@@ -296,11 +279,11 @@ class Detector:
         starts = np.concatenate([rows[:1], rows[breaks + 1]])
         ends = np.concatenate([rows[breaks], rows[-1:]])
         events: list[Event] = []
-        current: _OpenEvent | None = None
+        current: Event | None = None
         for first, last in zip(starts, ends, strict=True):
             segment = excursion[first : last + 1]
             row, col = np.unravel_index(int(np.argmax(segment)), segment.shape)
-            run = _OpenEvent(
+            run = Event(
                 start=float(t[first]),
                 end=float(t[last]),
                 joints=tuple(int(j) for j in joints[outside[first : last + 1].any(axis=0)]),
@@ -308,7 +291,7 @@ class Detector:
                 peak_residual=float(residual[first + row, col]),
             )
             if current is not None and run.start - current.end < self.hold:
-                current = current.merged(run)
+                current = _merged(current, run)
                 continue
             closed = self._close(current)
             if closed is not None:
@@ -482,9 +465,9 @@ class Detector:
         current = state.open_event
         if joints:
             k = int(np.argmax(excursion))
-            sample = _OpenEvent(time, time, joints, float(excursion[k]), float(r[cols[k]]))
+            sample = Event(time, time, joints, float(excursion[k]), float(r[cols[k]]))
             if current is not None and (state.outside or time - current.end < self.hold):
-                current = current.merged(sample)
+                current = _merged(current, sample)
             else:
                 ended = self._close(current)
                 current = sample

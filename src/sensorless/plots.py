@@ -164,6 +164,7 @@ def plot_residuals(
     Returns
     -------
     Figure
+        One axes per joint, the last one labelled with the time axis.
 
     Raises
     ------
@@ -252,16 +253,14 @@ def plot_tau_c(
         Run with the ground-truth external joint torques ``tau_c`` [N m].
     signals : ObserverSignals, optional
         Observer output whose residual [N m] is overlaid (on its own time base).
-    joints : sequence of int, optional
-        1-based joints to plot; default all.
-    title : str, optional
-        Figure title.
-    figsize : (float, float), optional
-        Figure size [in].
+    joints, title, figsize : optional
+        As in :func:`plot_residuals`: 1-based joints to plot (default all),
+        figure title, figure size [in] (default 8 wide and 2.2 per joint).
 
     Returns
     -------
     Figure
+        One axes per joint, as :func:`plot_residuals`.
 
     Raises
     ------
@@ -337,11 +336,12 @@ def plot_evaluation(
     title : str, optional
         Figure title.
     figsize : (float, float), optional
-        Figure size [in].
+        Figure size [in]; default 8 wide and 1.2 + 0.6 per method.
 
     Returns
     -------
     Figure
+        One axes with time along x and the methods along y.
 
     Raises
     ------

@@ -7,11 +7,17 @@ array of shape ``(n_dof,)``; scalars are broadcast to the common length.
 
 from __future__ import annotations
 
+import dataclasses
+from typing import TYPE_CHECKING, Any, cast
+
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validation import FloatArray, as_float_array, check_finite
+from .._validation import FloatArray, joint_parameter
 from ..exceptions import DimensionError, InputValueError
+
+if TYPE_CHECKING:
+    from _typeshed import DataclassInstance
 
 _BOUNDS = {
     ">= 0": lambda x: x >= 0.0,
@@ -37,15 +43,7 @@ def broadcast_parameters(model: str, **values: ArrayLike) -> list[FloatArray]:
     """
     arrays: dict[str, FloatArray] = {}
     for name, value in values.items():
-        label = f"{model}: {name}"
-        arr = as_float_array(value, label, "(n_dof,) or a scalar")
-        if arr.ndim > 1 or arr.size == 0:
-            raise DimensionError(
-                f"{label} must be a scalar or a non-empty array of shape (n_dof,); "
-                f"got shape {arr.shape}"
-            )
-        arrays[name] = np.atleast_1d(arr)
-        check_finite(arrays[name], label)
+        arrays[name] = np.atleast_1d(joint_parameter(value, f"{model}: {name}"))
     try:
         shape = np.broadcast_shapes(*(arr.shape for arr in arrays.values()))
     except ValueError:
@@ -76,6 +74,14 @@ def require(model: str, name: str, value: FloatArray, bound: str, meaning: str) 
         )
 
 
+def bound(relation: str, meaning: str) -> dict[str, Any]:
+    """Metadata of a parameter field: its range (a relation of :func:`require`) and meaning.
+
+    ``meaning`` says what the parameter is, with its unit, for the error message.
+    """
+    return {"range": (relation, meaning)}
+
+
 class JointParameters:
     """Per-joint constants stored once, immutable after construction."""
 
@@ -86,8 +92,14 @@ class JointParameters:
         """Number of joints the model describes."""
         return self._n_dof
 
-    def _assign(self, names: tuple[str, ...], arrays: list[FloatArray]) -> None:
+    def _set_parameters(self, **values: ArrayLike) -> None:
+        """Broadcast the parameters, check the ranges of their fields (:func:`bound`), store."""
+        model = type(self).__name__
+        arrays = broadcast_parameters(model, **values)
+        fields = {item.name: item for item in dataclasses.fields(cast("DataclassInstance", self))}
         # The subclasses are frozen dataclasses: attributes are set once, here.
-        for name, arr in zip(names, arrays, strict=True):
+        for name, arr in zip(values, arrays, strict=True):
+            if "range" in fields[name].metadata:
+                require(model, name, arr, *fields[name].metadata["range"])
             object.__setattr__(self, name, arr)
         object.__setattr__(self, "_n_dof", int(arrays[0].shape[0]))

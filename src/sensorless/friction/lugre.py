@@ -13,7 +13,7 @@ from numpy.typing import ArrayLike
 
 from .._validation import FloatArray, as_joint_array, check_dt
 from ..exceptions import DimensionError, InputValueError
-from ._parameters import JointParameters, broadcast_parameters, require
+from ._parameters import JointParameters, bound
 from .static import stribeck_level
 
 __all__ = ["LuGre"]
@@ -77,13 +77,13 @@ class LuGre(JointParameters):
     True
     """
 
-    sigma0: FloatArray
-    sigma1: FloatArray
-    sigma2: FloatArray
-    fc: FloatArray
-    fs: FloatArray
-    vs: FloatArray
-    delta: FloatArray
+    sigma0: FloatArray = field(metadata=bound("> 0", "bristle stiffness [N m/rad]"))
+    sigma1: FloatArray = field(metadata=bound(">= 0", "bristle damping [N m s/rad]"))
+    sigma2: FloatArray = field(metadata=bound(">= 0", "viscous coefficient [N m s/rad]"))
+    fc: FloatArray = field(metadata=bound("> 0", "Coulomb torque [N m]"))
+    fs: FloatArray = field(metadata=bound("> 0", "stiction torque [N m]"))
+    vs: FloatArray = field(metadata=bound("> 0", "Stribeck velocity [rad/s]"))
+    delta: FloatArray = field(metadata=bound("> 0", "Stribeck exponent [-]"))
     _drop: FloatArray = field(init=False, repr=False, compare=False)
     _gaussian: bool = field(init=False, repr=False, compare=False)
 
@@ -97,24 +97,9 @@ class LuGre(JointParameters):
         vs: ArrayLike,
         delta: ArrayLike = 2.0,
     ) -> None:
-        arrays = broadcast_parameters(
-            "LuGre",
-            sigma0=sigma0,
-            sigma1=sigma1,
-            sigma2=sigma2,
-            fc=fc,
-            fs=fs,
-            vs=vs,
-            delta=delta,
+        self._set_parameters(
+            sigma0=sigma0, sigma1=sigma1, sigma2=sigma2, fc=fc, fs=fs, vs=vs, delta=delta
         )
-        require("LuGre", "sigma0", arrays[0], "> 0", "bristle stiffness [N m/rad]")
-        require("LuGre", "sigma1", arrays[1], ">= 0", "bristle damping [N m s/rad]")
-        require("LuGre", "sigma2", arrays[2], ">= 0", "viscous coefficient [N m s/rad]")
-        require("LuGre", "fc", arrays[3], "> 0", "Coulomb torque [N m]")
-        require("LuGre", "fs", arrays[4], "> 0", "stiction torque [N m]")
-        require("LuGre", "vs", arrays[5], "> 0", "Stribeck velocity [rad/s]")
-        require("LuGre", "delta", arrays[6], "> 0", "Stribeck exponent")
-        self._assign(("sigma0", "sigma1", "sigma2", "fc", "fs", "vs", "delta"), arrays)
         # Constants of the inner loop, computed once: a simulator evaluates
         # s(qd) several times per sample.
         object.__setattr__(self, "_drop", self.fs - self.fc)

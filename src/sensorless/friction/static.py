@@ -8,14 +8,14 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.special import expit
 
 from .._validation import FloatArray, as_joint_array
-from ._parameters import JointParameters, broadcast_parameters, require
+from ._parameters import JointParameters, bound
 
 __all__ = [
     "Coulomb",
@@ -100,20 +100,13 @@ class Coulomb(FrictionModel):
     [-0.2591, 0.0, 0.2508]
     """
 
-    c_pos: FloatArray
-    c_neg: FloatArray
+    c_pos: FloatArray = field(metadata=bound(">= 0", "torque at positive velocity [N m]"))
+    c_neg: FloatArray = field(
+        metadata=bound("<= 0", "signed torque at negative velocity [N m], e.g. -0.2591")
+    )
 
     def __init__(self, c_pos: ArrayLike, c_neg: ArrayLike) -> None:
-        arrays = broadcast_parameters("Coulomb", c_pos=c_pos, c_neg=c_neg)
-        require("Coulomb", "c_pos", arrays[0], ">= 0", "torque at positive velocity [N m]")
-        require(
-            "Coulomb",
-            "c_neg",
-            arrays[1],
-            "<= 0",
-            "signed torque at negative velocity [N m], e.g. -0.2591",
-        )
-        self._assign(("c_pos", "c_neg"), arrays)
+        self._set_parameters(c_pos=c_pos, c_neg=c_neg)
 
     def evaluate(self, qd: FloatArray) -> FloatArray:
         return _coulomb(qd, self.c_pos, self.c_neg)
@@ -134,12 +127,10 @@ class Viscous(FrictionModel):
     [0.5, -6.0]
     """
 
-    fv: FloatArray
+    fv: FloatArray = field(metadata=bound(">= 0", "viscous coefficient [N m s/rad]"))
 
     def __init__(self, fv: ArrayLike) -> None:
-        arrays = broadcast_parameters("Viscous", fv=fv)
-        require("Viscous", "fv", arrays[0], ">= 0", "viscous coefficient [N m s/rad]")
-        self._assign(("fv",), arrays)
+        self._set_parameters(fv=fv)
 
     def evaluate(self, qd: FloatArray) -> FloatArray:
         return self.fv * qd
@@ -165,16 +156,12 @@ class CoulombViscous(FrictionModel):
     [-1.2, 1.3]
     """
 
-    c_pos: FloatArray
-    c_neg: FloatArray
-    fv: FloatArray
+    c_pos: FloatArray = field(metadata=bound(">= 0", "torque at positive velocity [N m]"))
+    c_neg: FloatArray = field(metadata=bound("<= 0", "signed torque at negative velocity [N m]"))
+    fv: FloatArray = field(metadata=bound(">= 0", "viscous coefficient [N m s/rad]"))
 
     def __init__(self, c_pos: ArrayLike, c_neg: ArrayLike, fv: ArrayLike) -> None:
-        arrays = broadcast_parameters("CoulombViscous", c_pos=c_pos, c_neg=c_neg, fv=fv)
-        require("CoulombViscous", "c_pos", arrays[0], ">= 0", "torque at positive velocity")
-        require("CoulombViscous", "c_neg", arrays[1], "<= 0", "signed torque at negative velocity")
-        require("CoulombViscous", "fv", arrays[2], ">= 0", "viscous coefficient [N m s/rad]")
-        self._assign(("c_pos", "c_neg", "fv"), arrays)
+        self._set_parameters(c_pos=c_pos, c_neg=c_neg, fv=fv)
 
     def evaluate(self, qd: FloatArray) -> FloatArray:
         return _coulomb(qd, self.c_pos, self.c_neg) + self.fv * qd
@@ -208,11 +195,11 @@ class Stribeck(FrictionModel):
     1.18434
     """
 
-    fc: FloatArray
-    fs: FloatArray
-    vs: FloatArray
-    fv: FloatArray
-    delta: FloatArray
+    fc: FloatArray = field(metadata=bound(">= 0", "Coulomb torque [N m]"))
+    fs: FloatArray = field(metadata=bound(">= 0", "stiction torque [N m]"))
+    vs: FloatArray = field(metadata=bound("> 0", "Stribeck velocity [rad/s]"))
+    fv: FloatArray = field(metadata=bound(">= 0", "viscous coefficient [N m s/rad]"))
+    delta: FloatArray = field(metadata=bound("> 0", "Stribeck exponent [-]"))
 
     def __init__(
         self,
@@ -222,13 +209,7 @@ class Stribeck(FrictionModel):
         fv: ArrayLike = 0.0,
         delta: ArrayLike = 2.0,
     ) -> None:
-        arrays = broadcast_parameters("Stribeck", fc=fc, fs=fs, vs=vs, fv=fv, delta=delta)
-        require("Stribeck", "fc", arrays[0], ">= 0", "Coulomb torque [N m]")
-        require("Stribeck", "fs", arrays[1], ">= 0", "stiction torque [N m]")
-        require("Stribeck", "vs", arrays[2], "> 0", "Stribeck velocity [rad/s]")
-        require("Stribeck", "fv", arrays[3], ">= 0", "viscous coefficient [N m s/rad]")
-        require("Stribeck", "delta", arrays[4], "> 0", "Stribeck exponent")
-        self._assign(("fc", "fs", "vs", "fv", "delta"), arrays)
+        self._set_parameters(fc=fc, fs=fs, vs=vs, fv=fv, delta=delta)
 
     def evaluate(self, qd: FloatArray) -> FloatArray:
         level = stribeck_level(np.abs(qd), self.fc, self.fs, self.vs, self.delta)
@@ -262,15 +243,12 @@ class Sigmoid(FrictionModel):
     0.0
     """
 
-    phi1: FloatArray
-    phi2: FloatArray
+    phi1: FloatArray = field(metadata=bound(">= 0", "torque span [N m]"))
+    phi2: FloatArray = field(metadata=bound(">= 0", "slope [s/rad]"))
     phi3: FloatArray
 
     def __init__(self, phi1: ArrayLike, phi2: ArrayLike, phi3: ArrayLike) -> None:
-        arrays = broadcast_parameters("Sigmoid", phi1=phi1, phi2=phi2, phi3=phi3)
-        require("Sigmoid", "phi1", arrays[0], ">= 0", "torque span [N m]")
-        require("Sigmoid", "phi2", arrays[1], ">= 0", "slope [s/rad]")
-        self._assign(("phi1", "phi2", "phi3"), arrays)
+        self._set_parameters(phi1=phi1, phi2=phi2, phi3=phi3)
 
     def evaluate(self, qd: FloatArray) -> FloatArray:
         offset = self.phi1 * expit(self.phi2 * self.phi3)
@@ -304,7 +282,7 @@ class HystereticError(FrictionModel):
     c: FloatArray
 
     def __init__(self, c: ArrayLike) -> None:
-        self._assign(("c",), broadcast_parameters("HystereticError", c=c))
+        self._set_parameters(c=c)
 
     def evaluate(self, qd: FloatArray) -> FloatArray:
         return -self.c * np.sign(qd)

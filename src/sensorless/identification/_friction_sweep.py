@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike
 
-from .._validation import FloatArray, check_scalar
+from .._validation import FloatArray, check_scalar, check_type
 from ..exceptions import DimensionError, InputTypeError, InputValueError
 from ..io import Log
 from ..robots.model import RobotModel
@@ -218,8 +218,7 @@ def identify_friction(
 def _check_log_and_robot(log: Log, robot: RobotModel) -> None:
     if not isinstance(log, Log):
         raise InputTypeError(f"log must be a sensorless.io.Log; got {type(log).__name__}")
-    if not isinstance(robot, RobotModel):
-        raise InputTypeError(f"robot must be a RobotModel; got {type(robot).__name__}")
+    check_type(robot, RobotModel, "robot")
     if log.n_dof != robot.n_dof:
         raise DimensionError(
             f"the log has {log.n_dof} joints (columns q_1..q_{log.n_dof}) but robot "

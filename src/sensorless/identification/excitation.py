@@ -53,8 +53,8 @@ import numpy as np
 import scipy.optimize
 from numpy.typing import ArrayLike
 
-from .._validation import FloatArray, as_float_array, check_int
-from ..exceptions import DimensionError, InputTypeError, InputValueError
+from .._validation import FloatArray, check_int, check_type, per_joint
+from ..exceptions import DimensionError, InputValueError
 from ..robots.base_parameters import BaseParameters, base_parameters
 from ..robots.model import RobotModel
 from ..trajectories import FourierSeries
@@ -80,18 +80,9 @@ def _joint_limits(
 ) -> FloatArray:
     """Limits of shape (n_dof,) [unit] from one number for all joints or one per joint.
 
-    Unlike :func:`sensorless._validation.per_joint`, ``inf`` is accepted here
-    (no limit); NaN is not.
+    ``inf`` is accepted here (no limit); NaN is not.
     """
-    arr = as_float_array(value, name, f"({n_dof},)")
-    if arr.shape not in ((), (n_dof,)):
-        raise DimensionError(
-            f"{name} must be a number or have shape ({n_dof},) [{unit}] for {n_dof} joints; "
-            f"got shape {arr.shape}"
-        )
-    if np.isnan(arr).any():
-        raise InputValueError(f"{name} must not contain NaN; got {arr}")
-    arr = np.broadcast_to(arr, (n_dof,)).copy()
+    arr = per_joint(value, n_dof, name, unit, allow_inf=True)
     if positive and (arr <= 0).any():
         j = int(np.argmax(arr <= 0))
         raise InputValueError(f"{name} must be positive [{unit}]; joint {j} has {arr[j]:.6g}")
@@ -439,22 +430,21 @@ def optimize_excitation(
     >>> bool(res.condition_number < res.initial_condition_number) and res.within_limits
     True
     """
-    if not isinstance(robot, RobotModel):
-        raise InputTypeError(f"robot must be a RobotModel; got {type(robot).__name__}")
+    check_type(robot, RobotModel, "robot")
     if base is None:
         base = base_parameters(robot, zero=zero)
-    elif not isinstance(base, BaseParameters):
-        raise InputTypeError(f"base must be a BaseParameters; got {type(base).__name__}")
-    elif tuple(zero):
-        raise InputValueError(
-            f"zero={tuple(zero)!r} applies only without base; the given base already fixes "
-            f"the zero parameters {base.zero!r}"
-        )
-    elif base.robot.n_dof != robot.n_dof:
-        raise DimensionError(
-            f"base belongs to a robot with {base.robot.n_dof} joints; robot "
-            f"{robot.name!r} has {robot.n_dof}"
-        )
+    else:
+        check_type(base, BaseParameters, "base")
+        if tuple(zero):
+            raise InputValueError(
+                f"zero={tuple(zero)!r} applies only without base; the given base already "
+                f"fixes the zero parameters {base.zero!r}"
+            )
+        if base.robot.n_dof != robot.n_dof:
+            raise DimensionError(
+                f"base belongs to a robot with {base.robot.n_dof} joints; robot "
+                f"{robot.name!r} has {robot.n_dof}"
+            )
     n_harmonics = check_int(n_harmonics, "n_harmonics", 1)
     if start_at_rest and n_harmonics < 2:
         raise InputValueError(

@@ -44,7 +44,14 @@ import scipy.linalg
 import scipy.stats
 from numpy.typing import ArrayLike
 
-from .._validation import FloatArray, as_float_array, as_joint_array, check_finite, check_scalar
+from .._validation import (
+    FloatArray,
+    as_float_array,
+    as_joint_array,
+    check_finite,
+    check_scalar,
+    check_type,
+)
 from ..exceptions import DimensionError, InputTypeError, InputValueError
 from ..robots.base_parameters import BaseParameters, base_parameters
 from ..robots.model import RobotModel
@@ -55,15 +62,6 @@ __all__ = ["contributing_terms", "identify_from_matrices", "matrix_regressors"]
 _TERMS = ("M", "g")
 #: Samples per segment: a Panda sample gives 7 + 28 rows of 48 columns (13 kB).
 _DEFAULT_SEGMENT = 1000
-
-
-def _check_base(base: BaseParameters) -> BaseParameters:
-    if not isinstance(base, BaseParameters):
-        raise InputTypeError(
-            f"base must be a BaseParameters (from sensorless.base_parameters); "
-            f"got {type(base).__name__}"
-        )
-    return base
 
 
 def _regressors(base: BaseParameters, q: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -111,7 +109,7 @@ def matrix_regressors(base: BaseParameters, q: ArrayLike) -> tuple[FloatArray, F
     >>> bool(np.allclose(np.einsum("irc,c->ri", y_m, base.values), robot.mass_matrix([0.3, -0.5])))
     True
     """
-    base = _check_base(base)
+    base = check_type(base, BaseParameters, "base", " (from sensorless.base_parameters)")
     q_arr, single = as_joint_array(q, base.robot.n_dof, "q")
     y_m, y_g = _regressors(base, q_arr)
     if single:
@@ -382,7 +380,7 @@ def contributing_terms(
     >>> contributing_terms(base, q).loc["mX1R"].tolist()
     [True, False, False]
     """
-    base = _check_base(base)
+    base = check_type(base, BaseParameters, "base", " (from sensorless.base_parameters)")
     if not (np.isfinite(tolerance) and 0.0 <= tolerance < 1.0):
         raise InputValueError(f"tolerance must lie in [0, 1); got {tolerance!r}")
     segment = _check_segment(segment)

@@ -14,7 +14,7 @@ import pandas as pd
 from numpy.typing import ArrayLike
 from scipy.integrate import trapezoid
 
-from .._validation import FloatArray, as_joint_array, check_dt, check_increasing
+from .._validation import FloatArray, as_joint_array, check_dt, check_increasing, check_type
 from ..exceptions import DimensionError, InputTypeError, InputValueError
 from ..filters import Butterworth, CausalEstimator
 from ..robots.base_parameters import BaseParameters, base_parameters
@@ -237,9 +237,7 @@ def _terms(
     chunk_size: int,
 ) -> tuple[BoundTerms, FloatArray]:
     """Validate the inputs of the metric and compute its terms."""
-    if not isinstance(robot, RobotModel):
-        raise InputTypeError(f"robot must be a RobotModel; got {type(robot).__name__}")
-    n_dof = robot.n_dof
+    n_dof = check_type(robot, RobotModel, "robot").n_dof
     qs, _ = as_joint_array(q, n_dof, "q")
     qds, _ = as_joint_array(qd, n_dof, "qd")
     qdds, _ = as_joint_array(qdd, n_dof, "qdd")
@@ -248,9 +246,7 @@ def _terms(
             f"q, qd and qdd must have the same shape (n_samples, {n_dof}); got {qs.shape}, "
             f"{qds.shape} and {qdds.shape}"
         )
-    base = base_parameters(robot) if base is None else base
-    if not isinstance(base, BaseParameters):
-        raise InputTypeError(f"base must be a BaseParameters; got {type(base).__name__}")
+    base = base_parameters(robot) if base is None else check_type(base, BaseParameters, "base")
     if base.robot.n_dof != n_dof:
         raise DimensionError(
             f"base parameters are for {base.robot.n_dof} joints; the robot has {n_dof}"

@@ -1,17 +1,24 @@
 """What both observers share: kinds, the output of one sample, checks and the nominal model.
 
-Units SI and radians; time series have shape ``(n_samples, n_dof)`` with time
-along axis 0; one sample has shape ``(n_dof,)``.
+Units and shapes as in :mod:`sensorless.observers`.
 """
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+import abc
+import math
+from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validation import FloatArray, as_joint_array, check_finite
+from .._validation import (
+    FloatArray,
+    as_joint_array,
+    check_finite,
+    check_type,
+    first_irregular_step,
+)
 from ..exceptions import DimensionError, InputTypeError, InputValueError
 from ..friction import FrictionModel, LuGre, Stribeck
 from ..robots.model import RobotModel
@@ -60,12 +67,7 @@ class ObserverSample(NamedTuple):
 
 # ---------------------------------------------------------------- shared helpers
 def _check_robot(robot: Any) -> RobotModel:
-    if not isinstance(robot, RobotModel):
-        raise InputTypeError(
-            f"robot must be a sensorless RobotModel (e.g. sensorless.robots.load('panda')); "
-            f"got {type(robot).__name__}"
-        )
-    return robot
+    return check_type(robot, RobotModel, "robot", " (e.g. sensorless.robots.load('panda'))")
 
 
 def _check_torque_kind(torque: Any) -> str:
@@ -142,17 +144,13 @@ def _check_time(t: ArrayLike, n_samples: int, dt: float) -> FloatArray:
             f"got shape {arr.shape}"
         )
     check_finite(arr, "t")
-    if n_samples > 1:
-        steps = np.diff(arr)
-        tolerance = _TIME_RTOL * dt + 4.0 * float(np.spacing(max(abs(arr[0]), abs(arr[-1]))))
-        bad = np.flatnonzero(np.abs(steps - dt) > tolerance)
-        if bad.size:
-            k = int(bad[0])
-            raise InputValueError(
-                f"t must be sampled every dt = {dt:g} s (the observer's period); the step from "
-                f"sample {k} to {k + 1} is {steps[k]:.9g} s. Build the observer with the log's "
-                "period, or resample the log with sensorless.io.resample(log, dt)"
-            )
+    k = first_irregular_step(arr, dt, _TIME_RTOL) if n_samples > 1 else None
+    if k is not None:
+        raise InputValueError(
+            f"t must be sampled every dt = {dt:g} s (the observer's period); the step from "
+            f"sample {k} to {k + 1} is {arr[k + 1] - arr[k]:.9g} s. Build the observer with the "
+            "log's period, or resample the log with sensorless.io.resample(log, dt)"
+        )
     return arr
 
 
@@ -218,8 +216,11 @@ class _FrictionFunction:
 
 
 # ---------------------------------------------------------------- momentum observer
-class _NominalObserver:
+class _NominalObserver(abc.ABC):
     """What both observers share: the nominal model, its friction and the torque kind."""
+
+    _family: ClassVar[str]
+    """The observer's name in :meth:`settings`."""
 
     def __init__(self, robot: RobotModel, friction: Any, torque: str) -> None:
         self._robot = _check_robot(robot)
@@ -248,3 +249,71 @@ class _NominalObserver:
     def n_dof(self) -> int:
         """Number of joints."""
         return self.robot.n_dof
+
+    @property
+    @abc.abstractmethod
+    def dt(self) -> float:
+        """Sample period [s]."""
+
+    @abc.abstractmethod
+    def _settings(self) -> dict[str, Any]:
+        """The settings of the family (its period ``dt`` last), as plain data."""
+
+    @abc.abstractmethod
+    def _repr_parameters(self) -> str:
+        """What sets this observer apart in its ``repr``, e.g. ``"dt=0.001, gain=[20.0]"``."""
+
+    def __repr__(self) -> str:
+        return (
+            f"{type(self).__name__}(robot={self.robot.name!r}, {self._repr_parameters()}, "
+            f"friction={_friction_name(self.friction_model)}, torque={self.torque!r})"
+        )
+
+    # ------------------------------------------------------------ input checks
+    def _first_sample(self, x: ArrayLike, name: str) -> FloatArray:
+        """The sample of ``initial_state``, checked, as an array of shape (1, n_dof)."""
+        return _one_sample(x, self.n_dof, name)
+
+    def _step_inputs(self, **values: ArrayLike) -> list[FloatArray]:
+        """The inputs of ``step``: finite, C-contiguous arrays of shape (n_dof,)."""
+        n = self.n_dof
+        arrays = [_sample(value, n, name) for name, value in values.items()]
+        # Dot products propagate NaN/inf and cost less than isfinite on each array;
+        # only then look for the culprit (a huge but finite value merely overflows).
+        total = 0.0
+        for arr in arrays:
+            total += float(arr @ arr)
+        if not math.isfinite(total):
+            _check_sample_finite(**dict(zip(values, arrays, strict=True)))
+        return arrays
+
+    def _run_inputs(
+        self, t: ArrayLike, started: bool, **series: ArrayLike
+    ) -> tuple[FloatArray, list[FloatArray]]:
+        """The inputs of ``run``: time [s] spaced by ``dt`` and series of one length.
+
+        ``series`` start with ``q``, whose length the others must have; without
+        a state (``started`` False) a run needs at least one sample to start at.
+        """
+        n = self.n_dof
+        arrays: list[FloatArray] = []
+        for name, value in series.items():
+            arrays.append(_series(value, n, name, arrays[0].shape[0] if arrays else None))
+        n_samples = arrays[0].shape[0]
+        t_arr = _check_time(t, n_samples, self.dt)
+        if not started and n_samples == 0:
+            raise DimensionError(
+                "q has no samples; pass a state to process an empty chunk, or at least one "
+                "sample to start at q[0]"
+            )
+        return t_arr, arrays
+
+    def settings(self) -> dict[str, Any]:
+        """The observer's settings as plain data (for metadata)."""
+        return {
+            "observer": self._family,
+            "torque": self.torque,
+            **self._settings(),
+            "friction": _friction_name(self.friction_model),
+            "robot": self.robot.name,
+        }

@@ -1,7 +1,6 @@
 """The acceleration-based estimate τ̂_c of eq. (3.8)/(3.16).
 
-Units SI and radians; time series have shape ``(n_samples, n_dof)`` with time
-along axis 0; one sample has shape ``(n_dof,)``.
+Units and shapes as in :mod:`sensorless.observers`.
 """
 
 from __future__ import annotations
@@ -17,16 +16,7 @@ from ..exceptions import DimensionError, InputTypeError
 from ..filters import CausalEstimator, FilterState
 from ..robots.model import RobotModel
 from ..signals import ObserverSignals
-from ._common import (
-    ObserverSample,
-    _check_sample_finite,
-    _check_time,
-    _friction_name,
-    _NominalObserver,
-    _one_sample,
-    _sample,
-    _series,
-)
+from ._common import ObserverSample, _NominalObserver
 
 __all__ = ["AccelerationObserver"]
 
@@ -71,6 +61,8 @@ class AccelerationObserver(_NominalObserver):
     True
     """
 
+    _family = "acceleration"
+
     def __init__(
         self,
         robot: RobotModel,
@@ -96,23 +88,12 @@ class AccelerationObserver(_NominalObserver):
         """Sample period of the estimator [s]."""
         return self.estimator.dt
 
-    def __repr__(self) -> str:
-        return (
-            f"AccelerationObserver(robot={self.robot.name!r}, estimator={self.estimator!r}, "
-            f"friction={_friction_name(self.friction_model)}, torque={self.torque!r})"
-        )
+    def _repr_parameters(self) -> str:
+        return f"estimator={self.estimator!r}"
 
-    def settings(self) -> dict[str, Any]:
-        """The observer's settings as plain data (for metadata)."""
-        return {
-            "observer": "acceleration",
-            "torque": self.torque,
-            "estimator": repr(self.estimator),
-            "delays": list(self.estimator.delays),
-            "dt": self.dt,
-            "friction": _friction_name(self.friction_model),
-            "robot": self.robot.name,
-        }
+    def _settings(self) -> dict[str, Any]:
+        estimator = self.estimator
+        return {"estimator": repr(estimator), "delays": list(estimator.delays), "dt": self.dt}
 
     def _estimate(
         self, q: FloatArray, qd: FloatArray, qdd: FloatArray, tau: FloatArray
@@ -127,7 +108,7 @@ class AccelerationObserver(_NominalObserver):
 
     def initial_state(self, q0: ArrayLike) -> FilterState:
         """Filter state of a robot at rest at ``q0`` [rad], shape (n_dof,)."""
-        return self.estimator.initial_state(_one_sample(q0, self.n_dof, "q0")[0])
+        return self.estimator.initial_state(self._first_sample(q0, "q0")[0])
 
     def _check_state(self, state: Any) -> FilterState:
         if not isinstance(state, FilterState):
@@ -161,11 +142,8 @@ class AccelerationObserver(_NominalObserver):
             τ̂_c, M q̂̈ + C q̂̇ + g, τ̂_fr(q̂̇) and sign(q̂̇), each of shape (n_dof,).
         state : FilterState
         """
-        n = self.n_dof
         state = self._check_state(state)
-        q_arr = _sample(q, n, "q")
-        tau_arr = _sample(tau, n, "tau")
-        _check_sample_finite(q=q_arr, tau=tau_arr)
+        q_arr, tau_arr = self._step_inputs(q=q, tau=tau)
         y, new_state = self.estimator.step(q_arr, state)
         out = self._estimate(q_arr[None], y.velocity[None], y.acceleration[None], tau_arr[None])
         return ObserverSample(*(x[0] for x in out)), new_state
@@ -196,18 +174,9 @@ class AccelerationObserver(_NominalObserver):
         state : FilterState
             Estimator state after the last sample.
         """
-        n = self.n_dof
         if state is not None:
             state = self._check_state(state)
-        q_arr = _series(q, n, "q")
-        n_samples = q_arr.shape[0]
-        tau_arr = _series(tau, n, "tau", n_samples)
-        t_arr = _check_time(t, n_samples, self.dt)
-        if state is None and n_samples == 0:
-            raise DimensionError(
-                "q has no samples; pass a state to process an empty chunk, or at least one "
-                "sample to start at rest at q[0]"
-            )
+        t_arr, (q_arr, tau_arr) = self._run_inputs(t, state is not None, q=q, tau=tau)
         if state is None:
             state = self.estimator.initial_state(q_arr[0])
         return self._run_checked(t_arr, q_arr, tau_arr, state)

@@ -1,12 +1,10 @@
 """The generalized-momentum residual r̂ (eq. 4.4) and r̂_s (eq. 4.9), discretised exactly.
 
-Units SI and radians; time series have shape ``(n_samples, n_dof)`` with time
-along axis 0; one sample has shape ``(n_dof,)``.
+Units and shapes as in :mod:`sensorless.observers`.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -27,13 +25,7 @@ from ._common import (
     _SIGN,
     ObserverSample,
     _check_gain,
-    _check_sample_finite,
-    _check_time,
-    _friction_name,
     _NominalObserver,
-    _one_sample,
-    _sample,
-    _series,
 )
 
 __all__ = ["MomentumObserver", "ObserverState"]
@@ -226,6 +218,8 @@ class MomentumObserver(_NominalObserver):
     [0.0, 0.0]
     """
 
+    _family = "momentum"
+
     def __init__(
         self,
         robot: RobotModel,
@@ -252,23 +246,11 @@ class MomentumObserver(_NominalObserver):
         """Observer gain K_I per joint [1/s] (read-only array)."""
         return self._gain
 
-    def __repr__(self) -> str:
-        return (
-            f"MomentumObserver(robot={self.robot.name!r}, dt={self.dt!r}, "
-            f"gain={self.gain.tolist()}, friction={_friction_name(self.friction_model)}, "
-            f"torque={self.torque!r})"
-        )
+    def _repr_parameters(self) -> str:
+        return f"dt={self.dt!r}, gain={self.gain.tolist()}"
 
-    def settings(self) -> dict[str, Any]:
-        """The observer's settings as plain data (for metadata)."""
-        return {
-            "observer": "momentum",
-            "torque": self.torque,
-            "gain": self.gain.tolist(),
-            "dt": self.dt,
-            "friction": _friction_name(self.friction_model),
-            "robot": self.robot.name,
-        }
+    def _settings(self) -> dict[str, Any]:
+        return {"gain": self.gain.tolist(), "dt": self.dt}
 
     # ------------------------------------------------------------ model terms
     def _terms(
@@ -308,9 +290,8 @@ class MomentumObserver(_NominalObserver):
             h_0 = g(q0) − Cᵀ(q0, q̇0) q̇0, filtered friction τ̂_fr(q̇0) and
             filtered sign sign(q̇0) (see the class notes).
         """
-        n = self.n_dof
-        q = _one_sample(q0, n, "q0")
-        qd = np.zeros((1, n)) if qd0 is None else _one_sample(qd0, n, "qd0")
+        q = self._first_sample(q0, "q0")
+        qd = np.zeros_like(q) if qd0 is None else self._first_sample(qd0, "qd0")
         return self._initial_state_checked(q, qd)
 
     def _initial_state_checked(self, q: FloatArray, qd: FloatArray) -> ObserverState:
@@ -360,15 +341,8 @@ class MomentumObserver(_NominalObserver):
         state : ObserverState
             State to pass with the next sample.
         """
-        n = self.n_dof
         state = self._check_state(state)
-        q_arr = _sample(q, n, "q")
-        qd_arr = _sample(qd, n, "qd")
-        tau_arr = _sample(tau, n, "tau")
-        # Dot products propagate NaN/inf and cost less than isfinite on each array;
-        # only then look for the culprit (a huge but finite value merely overflows).
-        if not math.isfinite(q_arr @ q_arr + qd_arr @ qd_arr + tau_arr @ tau_arr):
-            _check_sample_finite(q=q_arr, qd=qd_arr, tau=tau_arr)
+        q_arr, qd_arr, tau_arr = self._step_inputs(q=q, qd=qd, tau=tau)
         return self._step_checked(state, q_arr, qd_arr, tau_arr)
 
     def _step_checked(
@@ -423,20 +397,12 @@ class MomentumObserver(_NominalObserver):
         state : ObserverState
             State after the last sample.
         """
-        n = self.n_dof
         if state is not None:
             state = self._check_state(state)
-        q_arr = _series(q, n, "q")
-        n_samples = q_arr.shape[0]
-        qd_arr = _series(qd, n, "qd", n_samples)
-        tau_arr = _series(tau, n, "tau", n_samples)
-        t_arr = _check_time(t, n_samples, self.dt)
+        t_arr, (q_arr, qd_arr, tau_arr) = self._run_inputs(
+            t, state is not None, q=q, qd=qd, tau=tau
+        )
         if state is None:
-            if n_samples == 0:
-                raise DimensionError(
-                    "q has no samples; pass a state to process an empty chunk, or at least one "
-                    "sample to start at q[0]"
-                )
             state = self._initial_state_checked(q_arr[:1], qd_arr[:1])
         return self._run_checked(t_arr, q_arr, qd_arr, tau_arr, state)
 

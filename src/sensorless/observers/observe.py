@@ -1,11 +1,11 @@
 """Either observer over a whole :class:`~sensorless.io.Log`, with the default estimators.
 
-Units SI and radians; time series have shape ``(n_samples, n_dof)`` with time
-along axis 0.
+Units and shapes as in :mod:`sensorless.observers`.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any
 
@@ -209,17 +209,4 @@ def observe(
         settings |= momentum.settings()
     metadata = dict(log.metadata)
     metadata["observer"] = settings
-    return ObserverSignals(
-        t=signals.t,
-        residual=signals.residual,
-        model_torque=signals.model_torque,
-        friction=signals.friction,
-        sign=signals.sign,
-        velocity=signals.velocity,
-        gain=signals.gain,
-        kind=signals.kind,
-        robot=signals.robot,
-        position=signals.position,
-        acceleration=signals.acceleration,
-        metadata=metadata,
-    )
+    return dataclasses.replace(signals, metadata=metadata)

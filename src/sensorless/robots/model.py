@@ -376,14 +376,8 @@ class RobotModel:
     def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike) -> FloatArray:
         """Coriolis/centrifugal matrix C(q, q̇) with Ṁ − 2C skew-symmetric [kg m²/s].
 
-        Parameters
-        ----------
-        q, qd : array-like of shape (n_dof,) or (n_samples, n_dof)
-            Joint positions [rad] and velocities [rad/s].
-
-        Returns
-        -------
-        ndarray of shape (n_dof, n_dof) or (n_samples, n_dof, n_dof)
+        ``q`` [rad] and ``qd`` [rad/s] of shape (n_dof,) or (n_samples, n_dof) give
+        C of shape (n_dof, n_dof) or (n_samples, n_dof, n_dof), as :meth:`mass_matrix`.
         """
         shape = (self.n_dof, self.n_dof)
         return self._per_sample(pin.computeCoriolisMatrix, shape, (q, "q"), (qd, "qd"))
@@ -391,33 +385,20 @@ class RobotModel:
     def coriolis_transpose_velocity(self, q: ArrayLike, qd: ArrayLike) -> FloatArray:
         """C(q, q̇)ᵀ q̇ [N m], the term of the momentum observer (eq. 4.4).
 
-        Parameters
-        ----------
-        q, qd : array-like of shape (n_dof,) or (n_samples, n_dof)
-            Joint positions [rad] and velocities [rad/s].
-
-        Returns
-        -------
-        ndarray of shape (n_dof,) or (n_samples, n_dof)
+        ``q`` [rad] and ``qd`` [rad/s] of shape (n_dof,) or (n_samples, n_dof) give
+        a result of the same shape.
         """
         return self._per_sample(_coriolis_transpose_velocity, (self.n_dof,), (q, "q"), (qd, "qd"))
 
     def gravity(self, q: ArrayLike) -> FloatArray:
         """Gravity torque g(q) [N m].
 
-        Parameters
-        ----------
-        q : array-like of shape (n_dof,) or (n_samples, n_dof)
-            Joint positions [rad].
-
-        Returns
-        -------
-        ndarray of shape (n_dof,) or (n_samples, n_dof)
+        ``q`` [rad] of shape (n_dof,) or (n_samples, n_dof) gives g of the same shape.
         """
         return self._per_sample(pin.computeGeneralizedGravity, (self.n_dof,), (q, "q"))
 
     def nonlinear_effects(self, q: ArrayLike, qd: ArrayLike) -> FloatArray:
-        """C(q, q̇) q̇ + g(q) [N m]; shapes as in :meth:`coriolis_transpose_velocity`."""
+        """C(q, q̇) q̇ + g(q) [N m]; arguments and shapes as :meth:`coriolis_transpose_velocity`."""
         return self._per_sample(pin.nonLinearEffects, (self.n_dof,), (q, "q"), (qd, "qd"))
 
     def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> FloatArray:

@@ -48,13 +48,13 @@ from __future__ import annotations
 import dataclasses
 import functools
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validation import FloatArray, as_joint_array, check_finite
+from .._validation import FloatArray, as_joint_array, joint_parameter
 from ..exceptions import DimensionError, InputTypeError, InputValueError
 
 __all__ = ["SensorModel", "SensorState"]
@@ -62,16 +62,14 @@ __all__ = ["SensorModel", "SensorState"]
 #: A per-joint parameter: a scalar for every joint or one value per joint.
 PerJoint = float | Sequence[float] | FloatArray
 
-# field name -> (lower bound, strict?, meaning); None = any finite value.
-_BOUNDS: dict[str, tuple[float, bool, str] | None] = {
-    "encoder_resolution": (0.0, False, "quantisation step [rad]"),
-    "position_noise": (0.0, False, "standard deviation [rad]"),
-    "motor_torque_noise": (0.0, False, "standard deviation [N m]"),
-    "motor_torque_gain_error": (-1.0, True, "relative gain error [-]; the gain 1 + eps is > 0"),
-    "torque_sensor_noise": (0.0, False, "standard deviation [N m]"),
-    "torque_sensor_bias": None,
-    "torque_sensor_hysteresis": (0.0, False, "play half-width [N m]"),
-}
+
+def _bound(meaning: str, lower: float | None = 0.0, *, strict: bool = False) -> dict[str, Any]:
+    """Metadata of a :class:`SensorModel` field: what it is (with unit) and its bound.
+
+    The value must be ``> lower`` (``strict``) or ``>= lower``; ``lower=None``
+    accepts any finite value.
+    """
+    return {"bound": (lower, strict, meaning)}
 
 
 @dataclass(frozen=True, eq=False)
@@ -122,17 +120,22 @@ class SensorModel:
         width ``2 w`` as the torque goes up and down (thesis Fig. 5.11).
     """
 
-    encoder_resolution: PerJoint = 0.0
-    position_noise: PerJoint = 0.0
-    motor_torque_noise: PerJoint = 0.0
-    motor_torque_gain_error: PerJoint = 0.0
-    torque_sensor_noise: PerJoint = 0.0
-    torque_sensor_bias: PerJoint = 0.0
-    torque_sensor_hysteresis: PerJoint = 0.0
+    encoder_resolution: PerJoint = field(default=0.0, metadata=_bound("quantisation step [rad]"))
+    position_noise: PerJoint = field(default=0.0, metadata=_bound("standard deviation [rad]"))
+    motor_torque_noise: PerJoint = field(default=0.0, metadata=_bound("standard deviation [N m]"))
+    motor_torque_gain_error: PerJoint = field(
+        default=0.0, metadata=_bound("relative gain error [-]; gain 1 + eps > 0", -1.0, strict=True)
+    )
+    torque_sensor_noise: PerJoint = field(default=0.0, metadata=_bound("standard deviation [N m]"))
+    torque_sensor_bias: PerJoint = field(default=0.0, metadata=_bound("offset [N m]", None))
+    torque_sensor_hysteresis: PerJoint = field(
+        default=0.0, metadata=_bound("play half-width [N m]")
+    )
 
     def __post_init__(self) -> None:
         for item in dataclasses.fields(self):
-            object.__setattr__(self, item.name, _parameter(item.name, getattr(self, item.name)))
+            value = _parameter(item.name, getattr(self, item.name), *item.metadata["bound"])
+            object.__setattr__(self, item.name, value)
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -211,7 +214,7 @@ class SensorModel:
 
         Returns
         -------
-        q_meas : ndarray of the shape of ``q``
+        ndarray of the shape of ``q``
             Measured joint positions [rad].
         """
         values, single = _signal(q, "q")
@@ -236,7 +239,7 @@ class SensorModel:
 
         Returns
         -------
-        tau_m_meas : ndarray of the shape of ``tau_m``
+        ndarray of the shape of ``tau_m``
             Measured motor torques [N m].
         """
         values, single = _signal(tau_m, "tau_m")
@@ -320,29 +323,16 @@ class SensorModel:
         return values[0] if single else values
 
 
-def _parameter(name: str, value: Any) -> float | tuple[float, ...]:
+def _parameter(
+    name: str, value: Any, lower: float | None, strict: bool, meaning: str
+) -> float | tuple[float, ...]:
     """Check one SensorModel parameter; a scalar becomes a float, an array a tuple."""
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError):
+    arr = joint_parameter(value, f"SensorModel.{name}")
+    if lower is not None and (arr <= lower if strict else arr < lower).any():
+        relation = ">" if strict else ">="
         raise InputValueError(
-            f"SensorModel.{name} must be a number or an array of shape (n_dof,); got {value!r}"
-        ) from None
-    if arr.ndim > 1 or arr.size == 0:
-        raise DimensionError(
-            f"SensorModel.{name} must be a scalar or a non-empty array of shape (n_dof,); "
-            f"got shape {arr.shape}"
+            f"SensorModel.{name} must be {relation} {lower:g} ({meaning}); got {value!r}"
         )
-    check_finite(np.atleast_1d(arr), f"SensorModel.{name}")
-    bound = _BOUNDS[name]
-    if bound is not None:
-        lower, strict, meaning = bound
-        bad = arr <= lower if strict else arr < lower
-        if bad.any():
-            relation = ">" if strict else ">="
-            raise InputValueError(
-                f"SensorModel.{name} must be {relation} {lower:g} ({meaning}); got {value!r}"
-            )
     return float(arr) if arr.ndim == 0 else tuple(float(x) for x in arr)
 
 

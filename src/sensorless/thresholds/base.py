@@ -70,17 +70,15 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validation import FloatArray, check_dt, check_increasing
+from .._validation import FloatArray, check_dt, check_duration, check_increasing, per_joint
 from ..exceptions import DimensionError, InputTypeError, InputValueError, NotFittedError
 from ..signals import ObserverSignals
 from .checks import (
     as_inputs,
     as_runs,
-    check_bound,
     check_inputs_finite,
     check_joints,
     check_runs,
-    check_seconds,
     check_state,
 )
 from .files import METHODS, load_threshold, save_threshold, threshold_from_dict, threshold_to_dict
@@ -249,9 +247,9 @@ class Threshold(abc.ABC):
         ``kind`` becomes ``kind_``; the runs are those :meth:`_fit` expects.
         """
         first = runs[0]
-        margin = check_bound(self.margin, first.n_dof, "margin")
+        margin = per_joint(self.margin, first.n_dof, "margin", "N m", "nonnegative")
         check_joints(self.joints, first.n_dof)
-        transient = check_seconds(self.transient, "transient")
+        transient = check_duration(self.transient, "transient")
         keep = [run.t - run.t[0] >= transient for run in runs]
         if not any(k.any() for k in keep):
             raise InputValueError(

@@ -16,7 +16,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validation import FloatArray, as_joint_array, check_finite, check_increasing
+from .._validation import (
+    FloatArray,
+    as_joint_array,
+    check_finite,
+    check_increasing,
+    first_irregular_step,
+)
 from ..exceptions import DimensionError, InputTypeError, InputValueError
 from ..signals import ObserverSignals
 from .state import ThresholdInputs, ThresholdState
@@ -25,11 +31,9 @@ __all__ = [
     "as_inputs",
     "as_runs",
     "as_samples",
-    "check_bound",
     "check_inputs_finite",
     "check_joints",
     "check_runs",
-    "check_seconds",
     "check_state",
     "regular_period",
 ]
@@ -39,26 +43,6 @@ SERIES = ("model_torque", "friction", "sign", "velocity")
 
 
 # --------------------------------------------------------------------------- hyper-parameters
-
-
-def check_bound(value: Any, n_dof: int, name: str) -> FloatArray:
-    """A torque bound [N m] per joint (``margin``, ``disturbance``): scalar or (n_dof,), >= 0."""
-    try:
-        bound = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise InputValueError(
-            f"{name} must be a number or a sequence of {n_dof} numbers [N m]; got {value!r}"
-        ) from None
-    if bound.ndim == 0:
-        bound = np.full(n_dof, float(bound))
-    elif bound.shape != (n_dof,):
-        raise DimensionError(
-            f"{name} must be a scalar or have shape ({n_dof},) for {n_dof} joints; "
-            f"got shape {bound.shape}"
-        )
-    if not np.all(np.isfinite(bound)) or np.any(bound < 0.0):
-        raise InputValueError(f"{name} must be finite and >= 0 [N m]; got {value!r}")
-    return bound
 
 
 def check_joints(joints: Any, n_dof: int) -> tuple[int, ...]:
@@ -78,17 +62,6 @@ def check_joints(joints: Any, n_dof: int) -> tuple[int, ...]:
     return tuple(sorted(values))
 
 
-def check_seconds(value: Any, name: str) -> float:
-    """Return a non-negative, finite duration [s]."""
-    try:
-        seconds = float(value)
-    except (TypeError, ValueError):
-        raise InputValueError(f"{name} must be a number of seconds >= 0; got {value!r}") from None
-    if not np.isfinite(seconds) or seconds < 0.0:
-        raise InputValueError(f"{name} must be a finite number of seconds >= 0; got {value!r}")
-    return seconds
-
-
 # --------------------------------------------------------------------------- runs
 
 
@@ -100,10 +73,8 @@ def regular_period(t: FloatArray, what: str, rtol: float = 1e-6) -> float:
         )
     step = np.diff(t)
     median = float(np.median(step))
-    tolerance = rtol * median + 4.0 * float(np.spacing(max(abs(t[0]), abs(t[-1]))))
-    bad = np.flatnonzero(np.abs(step - median) > tolerance)
-    if bad.size:
-        k = int(bad[0])
+    k = first_irregular_step(t, median, rtol)
+    if k is not None:
         raise InputValueError(
             f"t of {what} is not regularly sampled: t[{k + 1}] - t[{k}] = {step[k]:.9g} s, "
             f"the median step is {median:.9g} s (rtol {rtol:g}); resample the log explicitly "

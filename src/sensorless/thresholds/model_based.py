@@ -60,7 +60,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import NDArray
 
-from .._validation import FloatArray
+from .._validation import FloatArray, per_joint
 from ..exceptions import DimensionError, InputTypeError, InputValueError, ModelError
 from ..filters import SavitzkyGolay
 from ..metric import (
@@ -77,7 +77,7 @@ from ..robots.base_parameters import BaseParameters, base_parameters
 from ..robots.model import N_LINK_PARAMETERS, RobotModel
 from ..signals import ObserverSignals
 from .base import StreamBounds, Threshold
-from .checks import check_bound, regular_period
+from .checks import regular_period
 from .fitting import BoolArray, rounding_guard
 from .state import ThresholdInputs, ThresholdState
 
@@ -253,7 +253,7 @@ class ModelBasedThreshold(Threshold):
         robot = self.robot_model()
         n_dof = robot.n_dof
         states = [self._check_run(run, n_dof, f"fit run {i}") for i, run in enumerate(runs)]
-        b_d = check_bound(self.disturbance, n_dof, "disturbance")
+        b_d = per_joint(self.disturbance, n_dof, "disturbance", "N m", "nonnegative")
         bq = self._learn_bq(runs, keep, states) if self.bq is None else check_bq(self.bq, n_dof)
         base = _base_parameters(robot)
         theta = base.values_of(robot)

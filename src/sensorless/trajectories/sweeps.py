@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike
 
-from .._validation import FloatArray, as_float_array, check_dt
+from .._validation import FloatArray, check_dt, per_joint
 from ..exceptions import DimensionError, InputTypeError, InputValueError
 from .base import Evaluation, Trajectory, _check_radians, _vector
 
@@ -30,21 +30,6 @@ def _ramp_shape(tau: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
     value = 0.5 * (1.0 - np.cos(np.pi * tau))
     slope = 0.5 * np.pi * np.sin(np.pi * tau)
     return integral, value, slope
-
-
-def _limit(x: ArrayLike, n_dof: int, name: str) -> FloatArray:
-    """One side of joint limits [rad], scalar or (n_dof,); ±inf (no stop) allowed, NaN not."""
-    arr = as_float_array(x, f"position_limits {name}", f"() or ({n_dof},)")
-    if arr.ndim == 0:
-        arr = np.full(n_dof, float(arr))
-    if arr.shape != (n_dof,):
-        raise DimensionError(
-            f"position_limits {name} must be a scalar or have shape ({n_dof},) [rad]; "
-            f"got shape {arr.shape}"
-        )
-    if np.isnan(arr).any():
-        raise InputValueError(f"position_limits {name} must not contain NaN; got {arr.tolist()}")
-    return arr
 
 
 def _grid(lo: float, hi: float, step: float) -> FloatArray:
@@ -218,8 +203,9 @@ class VelocitySweep(Trajectory):
             raise DimensionError(
                 f"position_limits must be a pair (lower, upper) [rad]; got {len(limits)} items"
             )
-        lower = _limit(limits[0], n_dof, "lower")
-        upper = _limit(limits[1], n_dof, "upper")
+        # ±inf is a side without a stop.
+        lower = per_joint(limits[0], n_dof, "position_limits lower", "rad", allow_inf=True)
+        upper = per_joint(limits[1], n_dof, "position_limits upper", "rad", allow_inf=True)
         if (lower >= upper).any():
             j = int(np.argmax(lower >= upper))
             raise InputValueError(

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+from pathlib import Path
 
 import pytest
 import yaml
@@ -219,3 +220,19 @@ def test_detect_reports_the_spans_it_refused(files, tmp_path) -> None:
     assert result.exit_code == 0, result.output
     assert "1 span(s) refused as faults" in result.output
     assert "tau_m of joint 2 is 1e+06 N m" in result.output
+
+
+UR10 = Path(__file__).resolve().parents[2] / "shared" / "data" / "ur10-ext_observer"
+
+
+@pytest.mark.skipif(not UR10.is_dir(), reason="../shared/data/ur10-ext_observer is absent")
+def test_import_splits_a_real_recording_at_its_gap(tmp_path) -> None:
+    out = tmp_path / "three.parquet"
+    args = ["import", "csv", str(UR10 / "3times.csv"), "--spec", "ur10_ext_observer"]
+    result = runner.invoke(app, [*args, "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    first, second = read_log(tmp_path / "three-1.parquet"), read_log(tmp_path / "three-2.parquet")
+    assert (first.n_samples, second.n_samples) == (32, 36)
+    assert first.groups == ["q", "qd", "tau_m"] and first.dt == pytest.approx(0.01)
+    result = runner.invoke(app, ["import", "matlab", str(UR10 / "3times.csv")])
+    assert result.exit_code == 2 and "unknown import format 'matlab'" in result.stderr

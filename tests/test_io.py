@@ -17,7 +17,15 @@ import pandas as pd
 import pytest
 
 from sensorless.exceptions import DimensionError, InputValueError, LogFormatError
-from sensorless.io import Log, read_log, resample, sidecar_path, validate_table, write_log
+from sensorless.io import (
+    Log,
+    read_log,
+    resample,
+    sidecar_path,
+    split_at_gaps,
+    validate_table,
+    write_log,
+)
 
 N_DOF = 3
 N_SAMPLES = 50
@@ -568,3 +576,110 @@ def test_resample_errors() -> None:
         resample(log, -0.1)
     with pytest.raises(InputValueError, match=r"dt = 0\.3 s is longer than the log"):
         resample(log, 0.3)
+
+
+def test_resample_refuses_a_gap() -> None:
+    # 100 Hz with the 0.194 s hole of a real recording after t = 1 s.
+    t = np.concatenate([0.01 * np.arange(101), 1.194 + 0.01 * np.arange(50)])
+    log = Log(t=t, q=np.outer(t, [1.0, -1.0]), metadata={"robot": "x"})
+    with pytest.raises(
+        LogFormatError,
+        match=(
+            r"refuses to interpolate across a gap: the log has no sample from t = 1\.0 s "
+            r"\(row 100\) to t = 1\.194 s \(row 101\), 0\.194 s = 19\.4 periods of 0\.01 s; "
+            r".*max_gap = 3 periods\. .*split_at_gaps.*allow_gaps=True"
+        ),
+    ):
+        resample(log, 0.01)
+    # The period is the longer of dt and the log's step: at 10 Hz the hole is 1.9 periods.
+    assert resample(log, 0.1).n_samples == 17
+    assert resample(log, 0.01, max_gap=20).n_samples == 169
+    forced = resample(log, 0.01, allow_gaps=True)
+    np.testing.assert_allclose(forced.q[:, 0], forced.t, rtol=0, atol=1e-12)
+    assert forced.metadata["resampled"]["interpolated_gaps"] == [
+        {"t_start": 1.0, "t_end": 1.194, "duration": pytest.approx(0.194)}
+    ]
+    assert forced.metadata["resampled"]["max_gap"] == 3.0
+    with pytest.raises(LogFormatError, match=r"\(the first of 2 gaps\)"):
+        resample(Log(t=[0.0, 0.01, 0.5, 0.51, 1.0, 1.01], q=np.zeros((6, 1))), 0.01)
+    with pytest.raises(InputValueError, match=r"max_gap must be a finite number > 0"):
+        resample(log, 0.01, max_gap=0.0)
+    with pytest.raises(TypeError, match="allow_gaps must be True or False"):
+        resample(log, 0.01, allow_gaps="yes")  # type: ignore[arg-type]
+
+
+def test_split_at_gaps() -> None:
+    t = np.array([0.0, 0.01, 0.02, 0.5, 0.9, 0.91, 0.92, 0.93])
+    collision_id = np.arange(8)
+    log = Log(t=t, q=np.outer(t, [2.0]), collision_id=collision_id, metadata={"seed": 1})
+    first, second = split_at_gaps(log)  # 3 median steps of 0.01 s
+    assert first.t.tolist() == [0.0, 0.01, 0.02]
+    assert second.t.tolist() == [0.9, 0.91, 0.92, 0.93]
+    assert second.collision_id.tolist() == [4, 5, 6, 7]
+    np.testing.assert_array_equal(second.q[:, 0], 2.0 * second.t)
+    segment = second.metadata["segment"]
+    assert segment["index"] == 1 and segment["count"] == 2 and segment["first_row"] == 4
+    assert segment["isolated_samples_dropped"] == 1  # the sample at 0.5 s
+    assert [gap["t_start"] for gap in segment["gaps"]] == [0.02, 0.5]
+    assert second.metadata["seed"] == 1
+    # Segments share the log's memory instead of copying it.
+    assert np.shares_memory(second.q, log.q)
+    [whole] = split_at_gaps(log, tolerance=1.0)
+    assert np.array_equal(whole.t, log.t) and whole.metadata["segment"]["count"] == 1
+    with pytest.raises(LogFormatError, match=r"no two consecutive samples .* tolerance = 0\.001 s"):
+        split_at_gaps(log, tolerance=0.001)
+    with pytest.raises(InputValueError, match="tolerance must be a finite number > 0"):
+        split_at_gaps(log, tolerance=-1.0)
+
+
+# --------------------------------------------------------------------------- measured velocity
+
+
+def test_measured_velocity_and_vendor_estimate_groups(tmp_path) -> None:
+    rng = np.random.default_rng(4)
+    t = DT * np.arange(20)
+    q = rng.uniform(-1.0, 1.0, (20, 2))
+    qd = rng.normal(0.0, 30.0, (20, 2))  # large velocities are not angles
+    log = Log(t=t, q=q, qd=qd, tau_m=-q, tau_ext=rng.normal(size=(20, 2)), qd_true=qd + 1.0)
+    assert log.groups == ["q", "qd", "tau_m", "tau_ext", "qd_true"]
+    assert log.columns[:5] == ["t", "q_1", "q_2", "qd_1", "qd_2"]
+    assert log.columns[7:9] == ["tau_ext_1", "tau_ext_2"]
+    for suffix in (".parquet", ".csv"):
+        path = write_log(log, tmp_path / f"measured{suffix}")
+        sidecar = json.loads(sidecar_path(path).read_text())
+        assert sidecar["units"]["qd"] == "rad/s" and sidecar["units"]["tau_ext"] == "N m"
+        again = read_log(path)
+        assert np.array_equal(again.qd, log.qd) and np.array_equal(again.tau_ext, log.tau_ext)
+        assert again.columns == log.columns
+    # A log without them is unchanged: no column, no attribute value.
+    plain = Log(t=t, q=q)
+    assert plain.qd is None and plain.tau_ext is None and plain.columns == ["t", "q_1", "q_2"]
+    sliced = log.slice(0.005)
+    assert np.array_equal(sliced.qd, log.qd[5:])
+    assert np.array_equal(resample(log, 2 * DT).qd, log.qd[::2])
+
+
+def test_measured_velocity_checks() -> None:
+    df = small_table()
+    df["qd_1"] = 0.0
+    with pytest.raises(LogFormatError, match=r"qd: 1.*missing column\(s\) \['qd_2'\]"):
+        validate_table(df)
+    df["qd_2"] = [0.0, 0.0, math.inf, 0.0, 0.0]
+    with pytest.raises(LogFormatError, match=r"column 'qd_2' must be finite; row 2 holds inf"):
+        validate_table(df)
+    with pytest.raises(DimensionError, match=r"qd must have the shape of q"):
+        Log(t=[0.0, 1.0], q=np.zeros((2, 2)), qd=np.zeros((2, 3)))
+    # The new groups are keyword-only: positional arguments keep their meaning.
+    positional = Log([0.0, 1.0], np.zeros((2, 1)), np.ones((2, 1)))
+    assert positional.tau_m is not None and positional.qd is None
+
+
+def test_log_shares_read_only_arrays() -> None:
+    log = make_log()
+    again = Log(t=log.t, q=log.q, tau_m=log.tau_m)
+    assert np.shares_memory(again.q, log.q)
+    view = np.zeros((N_SAMPLES, N_DOF))
+    frozen = view[:]
+    frozen.setflags(write=False)  # read-only view of a writable array: still copied
+    copied = Log(t=log.t, q=frozen)
+    assert not np.shares_memory(copied.q, view)

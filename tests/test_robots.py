@@ -592,18 +592,20 @@ def test_models_are_immutable(planar: sl.RobotModel) -> None:
 
 # --------------------------------------------------------------------------- registry
 def test_available_and_load() -> None:
-    assert sl.robots.available() == ["lwr4", "panda", "panda_gaz", "planar2", "puma560"]
-    for name, n_dof in {"panda": 7, "panda_gaz": 7, "planar2": 2, "puma560": 6}.items():
+    expected = ["lwr4", "panda", "panda_gaz", "planar2", "puma560", "ur10", "ur5"]
+    assert sl.robots.available() == expected
+    dofs = {"panda": 7, "panda_gaz": 7, "planar2": 2, "puma560": 6, "ur10": 6, "ur5": 6}
+    for name, n_dof in dofs.items():
         robot = sl.robots.load(name)
         assert robot.n_dof == n_dof
         assert robot.name == name
 
 
 def test_unknown_robot_lists_the_available_ones() -> None:
-    with pytest.raises(UnknownNameError, match=r"'ur5'.*panda.*panda_gaz.*planar2.*puma560"):
-        sl.robots.load("ur5")
+    with pytest.raises(UnknownNameError, match=r"'ur3'.*panda.*panda_gaz.*puma560.*ur10.*ur5"):
+        sl.robots.load("ur3")
     with pytest.raises(KeyError):
-        sl.robots.load("ur5")
+        sl.robots.load("ur3")
 
 
 # --------------------------------------------------------------------------- errors

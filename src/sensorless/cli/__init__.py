@@ -15,6 +15,7 @@ import typer
 from ._common import settings, user_errors
 from .demo import demo_command
 from .identify import excite_command, identify_friction_command, identify_inertial_command
+from .importing import import_command
 from .run import (
     detect_command,
     evaluate_command,
@@ -53,6 +54,7 @@ COMMANDS: dict[str, Callable[..., None]] = {
     "evaluate": evaluate_command,
     "demo": demo_command,
     "excite": excite_command,
+    "import": import_command,
 }
 for name, command in COMMANDS.items():
     app.command(name)(user_errors(command))

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import numpy as np
 import typer
@@ -18,6 +18,7 @@ from ..monitor import (
     CollisionMonitor,
     MonitorRun,
     ObserverSettings,
+    calibration_of,
     load_tuned,
     save_tuned,
     tune,
@@ -123,17 +124,49 @@ def tune_command(
         str | None, typer.Option("--kind", help="motor or joint (momentum methods).")
     ] = None,
     margin: Annotated[
-        float, typer.Option("--margin", help="Margin added to the bounds [N m].")
-    ] = 0.0,
+        float | None,
+        typer.Option("--margin", help="Margin added to the bounds [N m] (default 0)."),
+    ] = None,
+    false_alarm_rate: Annotated[
+        float | None,
+        typer.Option(
+            "--false-alarm-rate",
+            help="Stated false alarms per hour for the robot: sets the margin (not with --margin).",
+        ),
+    ] = None,
+    folds: Annotated[
+        str,
+        typer.Option("--folds", help="Cross-validation folds: 'runs' or an integer >= 2."),
+    ] = "runs",
 ) -> None:
-    """Fit a threshold family on collision-free logs and save it with its observer settings."""
+    """Fit a threshold family on collision-free logs, cross-validate it and save it.
+
+    Prints the false alarms per hour to expect (cross-validated on the logs,
+    with its interval) and why the logs may not support that figure.
+    """
+    folds_value: str | int = folds
+    if folds != "runs":
+        try:
+            folds_value = int(folds)
+        except ValueError:
+            raise typer.BadParameter(
+                f"must be 'runs' or an integer >= 2; got {folds!r}", param_hint="--folds"
+            ) from None
     output_path(output, suffixes=(".yaml", ".yml"))
     runs = [read_log(path) for path in logs]
     settings = ObserverSettings(kind=kind or METHOD_NAMES.get(method, "motor"), gain=gain)
     nominal = nominal_robot(robot, runs[0], settings.kind)
-    threshold, settings = tune(runs, nominal, method, settings, margin=margin)
+    options: dict[str, Any] = {} if margin is None else {"margin": margin}
+    threshold, settings = tune(
+        runs, nominal, method, settings, false_alarm_rate=false_alarm_rate, folds=folds_value,
+        **options,
+    )  # fmt: skip
     path = save_tuned(output, threshold, settings)
     console.print(f"wrote {path}: {threshold!r} fitted on {len(runs)} log(s) of {nominal.name}")
+    calibration = calibration_of(threshold)
+    if calibration is not None:
+        for line in calibration.summary():
+            console.print(line, markup=False, highlight=False)
 
 
 def _detect(log_path: Path, thresholds: Path, robot: str | None) -> tuple[Log, str, MonitorRun]:
@@ -158,12 +191,17 @@ def detect_command(
         str | None, typer.Option("--robot", help="Nominal model (default: the log's scenario).")
     ] = None,
 ) -> None:
-    """Detect collisions in a log and print the events."""
+    """Detect collisions in a log and print the events, and the false alarms tuning expected."""
     _, method, result = _detect(log, thresholds, robot)
     _print_faults(result)
     console.print(f"{len(result.events)} event(s) detected by {method}")
     if result.events:
         print_table(events_to_pandas(result.events))
+    calibration = calibration_of(load_tuned(thresholds)[0])
+    if calibration is not None:
+        console.print("expected at tuning:", highlight=False)
+        for line in calibration.summary():
+            console.print(f"  {line}", markup=False, highlight=False)
 
 
 def evaluate_command(

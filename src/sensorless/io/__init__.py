@@ -9,8 +9,11 @@ column             unit        meaning
 =================  ==========  ====================================================
 ``t``              s           time stamp, strictly increasing
 ``q_j``            rad         measured joint position (required)
+``qd_j``           rad/s       measured joint velocity, as the robot reports it (optional)
 ``tau_m_j``        N m         motor / commanded joint torque (optional)
 ``tau_j_j``        N m         joint-torque-sensor torque (optional)
+``tau_ext_j``      N m         the robot vendor's own external-torque estimate, kept as a
+                               baseline to compare with (optional)
 ``q_true_j``       rad         ground-truth joint position (optional)
 ``qd_true_j``      rad/s       ground-truth joint velocity (optional)
 ``tau_c_j``        N m         ground-truth external joint torque (optional)
@@ -30,15 +33,25 @@ rate [Hz] and the user metadata. Both formats keep float64 values exactly.
 :meth:`Log.from_pandas` and the :class:`Log` constructor all go through it,
 so a :class:`Log` cannot hold an inconsistent run. Irregular time stamps are
 an error on read; :func:`resample` is the explicit way to put a jittery log
-on a regular grid.
+on a regular grid, and it refuses to interpolate across a gap (a step of more
+than a few periods) unless asked: :func:`split_at_gaps` cuts a log into the
+regular stretches between its gaps instead.
+
+Recordings of real robots in other formats come in through the importers of
+:mod:`sensorless.io.importers` (:func:`import_log` and one function per
+format: a column-mapping CSV described by a YAML spec, Franka, UR RTDE and
+ROS 2 bags), which return the segments of a recording as logs and record
+where each value came from in the metadata.
 
 The package keeps one concern per module: :mod:`~sensorless.io.columns`
 (column names, units and limits), :mod:`~sensorless.io.validate`
-(:func:`validate_table`), :mod:`~sensorless.io.log` (:class:`Log`,
-:func:`resample`) and :mod:`~sensorless.io.files` (the Parquet/CSV files and
-their sidecar). A reader of another file format builds a table with the
-column names of :mod:`~sensorless.io.columns` and passes it to
-:meth:`Log.from_pandas`, so that it goes through the same validation.
+(:func:`validate_table`), :mod:`~sensorless.io.log` (:class:`Log`),
+:mod:`~sensorless.io.timebase` (:func:`resample`, :func:`split_at_gaps`),
+:mod:`~sensorless.io.files` (the Parquet/CSV files and their sidecar) and
+:mod:`~sensorless.io.importers` (foreign formats). A reader of another file
+format builds a :class:`Log` (or a table with the column names of
+:mod:`~sensorless.io.columns` for :meth:`Log.from_pandas`), so that it goes
+through the same validation.
 
 >>> import numpy as np
 >>> t = np.arange(5) * 0.001
@@ -53,18 +66,41 @@ from __future__ import annotations
 
 from .columns import ANGLE_LIMIT, JOINT_GROUPS, UNITS
 from .files import FORMATS, read_log, sidecar_path, write_log
-from .log import Log, resample
+from .importers import (
+    IMPORT_FORMATS,
+    UR_CURRENT_GAINS,
+    CsvSpec,
+    import_csv,
+    import_franka,
+    import_log,
+    import_ros2,
+    import_ur_rtde,
+    load_csv_spec,
+)
+from .log import Log
+from .timebase import DEFAULT_MAX_GAP, resample, split_at_gaps
 from .validate import validate_table
 
 __all__ = [
     "ANGLE_LIMIT",
+    "DEFAULT_MAX_GAP",
     "FORMATS",
+    "IMPORT_FORMATS",
     "JOINT_GROUPS",
     "UNITS",
+    "UR_CURRENT_GAINS",
+    "CsvSpec",
     "Log",
+    "import_csv",
+    "import_franka",
+    "import_log",
+    "import_ros2",
+    "import_ur_rtde",
+    "load_csv_spec",
     "read_log",
     "resample",
     "sidecar_path",
+    "split_at_gaps",
     "validate_table",
     "write_log",
 ]

@@ -28,7 +28,16 @@ __all__ = [
     "show_value",
 ]
 
-JOINT_GROUPS: tuple[str, ...] = ("q", "tau_m", "tau_j", "q_true", "qd_true", "tau_c")
+JOINT_GROUPS: tuple[str, ...] = (
+    "q",
+    "qd",
+    "tau_m",
+    "tau_j",
+    "tau_ext",
+    "q_true",
+    "qd_true",
+    "tau_c",
+)
 """Per-joint column groups in table order; ``q`` is required, the others optional."""
 
 OPTIONAL_GROUPS: tuple[str, ...] = JOINT_GROUPS[1:]
@@ -37,8 +46,10 @@ OPTIONAL_GROUPS: tuple[str, ...] = JOINT_GROUPS[1:]
 UNITS: dict[str, str] = {
     "t": "s",
     "q": "rad",
+    "qd": "rad/s",
     "tau_m": "N m",
     "tau_j": "N m",
+    "tau_ext": "N m",
     "q_true": "rad",
     "qd_true": "rad/s",
     "tau_c": "N m",
@@ -52,12 +63,12 @@ ANGLE_LIMIT = 4.0 * math.pi
 ANGLE_GROUPS: tuple[str, ...] = ("q", "q_true")
 """Per-joint groups that hold angles [rad] and are checked against :data:`ANGLE_LIMIT`."""
 
-COLUMN_PATTERN = re.compile(r"(q|tau_m|tau_j|q_true|qd_true|tau_c)_([1-9][0-9]*)")
+COLUMN_PATTERN = re.compile(rf"({'|'.join(JOINT_GROUPS)})_([1-9][0-9]*)")
 """A per-joint column name: group ``[1]`` and 1-based joint number ``[2]``."""
 
 KNOWN_COLUMNS = (
-    "'t', 'q_<j>', 'tau_m_<j>', 'tau_j_<j>', 'q_true_<j>', 'qd_true_<j>', 'tau_c_<j>', "
-    "'collision_id' (joint numbers j = 1..n_dof)"
+    "'t', 'q_<j>', 'qd_<j>', 'tau_m_<j>', 'tau_j_<j>', 'tau_ext_<j>', 'q_true_<j>', "
+    "'qd_true_<j>', 'tau_c_<j>', 'collision_id' (joint numbers j = 1..n_dof)"
 )
 """The valid column names, as error messages list them."""
 

@@ -2,8 +2,9 @@
 
 A :class:`Log` holds the columns of the :mod:`sensorless.io` layout as
 read-only arrays, always validated by :func:`~sensorless.io.validate_table`.
-:meth:`Log.slice` cuts it in time and :func:`resample` puts it on a regular
-grid; reading and writing files is :mod:`sensorless.io.files`.
+:meth:`Log.slice` cuts it in time; putting it on a regular grid and cutting it
+at its gaps is :mod:`sensorless.io.timebase`, reading and writing files
+:mod:`sensorless.io.files`.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
-from .._validation import FloatArray, check_dt
+from .._validation import FloatArray
 from ..exceptions import DimensionError, InputValueError
 from .columns import JOINT_GROUPS, OPTIONAL_GROUPS, column_name, show_value
 from .validate import TableChecks, as_float_column, validate_table
@@ -27,7 +28,7 @@ from .validate import TableChecks, as_float_column, validate_table
 if TYPE_CHECKING:
     from typing import Unpack
 
-__all__ = ["Log", "resample"]
+__all__ = ["Log"]
 
 IntArray = NDArray[np.int64]
 
@@ -55,7 +56,24 @@ def _normalise_metadata(metadata: Any) -> dict[str, Any]:
     return result
 
 
+def _is_frozen(arr: NDArray[Any]) -> bool:
+    """True if ``arr`` and every array it views are read-only, so nothing can write to it."""
+    base: Any = arr
+    while isinstance(base, np.ndarray):
+        if base.flags.writeable:
+            return False
+        if base.base is None:
+            return True
+        base = base.base
+    # A view of a foreign buffer (bytes, mmap, ...): its owner may still write to it.
+    return False
+
+
 def _frozen(values: ArrayLike, dtype: type[np.generic]) -> Any:
+    if isinstance(values, np.ndarray) and values.dtype == dtype and _is_frozen(values):
+        # Already read-only (another log's array, or one handed over by an importer):
+        # sharing it saves a copy of a long recording.
+        return values
     arr = np.array(values, dtype=dtype, copy=True)
     arr.setflags(write=False)
     return arr
@@ -66,9 +84,11 @@ class Log:
     """One robot run: time, measured joint positions, torques and labels.
 
     Arrays are copied to float64 (``collision_id`` to int64) and made
-    read-only; the constructor validates them with :func:`~sensorless.io.validate_table`
-    (without the regularity check, so that a jittery log read with
-    ``check_regular=False`` can be passed to :func:`resample`).
+    read-only; an array that is already a read-only float64 (int64) array,
+    such as another log's, is shared instead of copied. The constructor
+    validates them with :func:`~sensorless.io.validate_table` (without the
+    regularity check, so that a jittery log read with ``check_regular=False``
+    can be passed to :func:`~sensorless.io.resample`).
 
     Parameters
     ----------
@@ -76,10 +96,16 @@ class Log:
         Time stamps [s], strictly increasing.
     q : array-like of shape (n_samples, n_dof)
         Measured joint positions [rad].
+    qd : array-like of shape (n_samples, n_dof), optional, keyword-only
+        Measured joint velocities [rad/s], as the robot's controller reports
+        them (not the simulator's ground truth ``qd_true``).
     tau_m : array-like of shape (n_samples, n_dof), optional
         Motor / commanded joint torques [N m].
     tau_j : array-like of shape (n_samples, n_dof), optional
         Joint-torque-sensor torques [N m].
+    tau_ext : array-like of shape (n_samples, n_dof), optional, keyword-only
+        The robot vendor's own external-torque estimate [N m] (e.g. Franka's
+        ``tau_ext_hat_filtered``), a baseline to compare residuals with.
     q_true : array-like of shape (n_samples, n_dof), optional
         Ground-truth joint positions [rad].
     qd_true : array-like of shape (n_samples, n_dof), optional
@@ -106,8 +132,11 @@ class Log:
 
     t: FloatArray
     q: FloatArray
+    # Keyword-only: added after the other fields, they must not shift positional arguments.
+    qd: FloatArray | None = field(default=None, kw_only=True)
     tau_m: FloatArray | None = None
     tau_j: FloatArray | None = None
+    tau_ext: FloatArray | None = field(default=None, kw_only=True)
     q_true: FloatArray | None = None
     qd_true: FloatArray | None = None
     tau_c: FloatArray | None = None
@@ -200,9 +229,10 @@ class Log:
         Returns
         -------
         DataFrame
-            Columns ``t``, then ``q_1..q_n``, ``tau_m_1..``, ``tau_j_1..``,
-            ``q_true_1..``, ``qd_true_1..``, ``tau_c_1..`` (present groups only,
-            1-based joint numbers, float64) and ``collision_id`` (int64) if present.
+            Columns ``t``, then ``q_1..q_n``, ``qd_1..``, ``tau_m_1..``,
+            ``tau_j_1..``, ``tau_ext_1..``, ``q_true_1..``, ``qd_true_1..``,
+            ``tau_c_1..`` (present groups only, 1-based joint numbers, float64)
+            and ``collision_id`` (int64) if present.
         """
         data: dict[str, NDArray[Any]] = {"t": self.t}
         for group in self.groups:
@@ -301,70 +331,3 @@ def _time_bound(value: Any, name: str) -> float:
     if math.isnan(bound):
         raise InputValueError(f"{name} must be a time [s] or None; got {value!r}")
     return bound
-
-
-def resample(log: Log, dt: float) -> Log:
-    """Put a log on a regular time grid by linear interpolation.
-
-    This is the explicit alternative to the irregular-time error of
-    :func:`~sensorless.io.read_log`: read a jittery log with ``check_regular=False`` and
-    resample it. The new grid is ``t[0] + k * dt`` for every ``k`` that stays
-    within the log. Joint quantities are interpolated linearly;
-    ``collision_id`` takes the value of the latest original sample at or
-    before each grid time (zero-order hold), so a label shorter than ``dt``
-    can fall between grid points.
-
-    Parameters
-    ----------
-    log : Log
-        The log to resample (any time base).
-    dt : float
-        New sample period [s].
-
-    Returns
-    -------
-    Log
-        The resampled log; its metadata is a copy with ``sample_rate`` [Hz]
-        set to ``1 / dt`` and a ``resampled`` entry recording the operation.
-
-    Raises
-    ------
-    InputValueError
-        ``dt`` is not positive and finite, or longer than the log.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> log = Log(t=[0.0, 0.09, 0.2], q=[[0.0], [0.09], [0.2]])
-    >>> new = resample(log, 0.05)
-    >>> new.t.round(12).tolist(), new.q[:, 0].round(12).tolist()
-    ([0.0, 0.05, 0.1, 0.15, 0.2], [0.0, 0.05, 0.1, 0.15, 0.2])
-    """
-    step = check_dt(dt)
-    # A relative slack of 1e-9 keeps the last sample when duration / dt is an integer
-    # that floating point puts just below itself.
-    n_samples = math.floor(log.duration / step + 1e-9) + 1
-    if n_samples < 2:
-        raise InputValueError(
-            f"dt = {step!r} s is longer than the log ({log.duration!r} s); the resampled log "
-            "would have fewer than 2 samples"
-        )
-    grid = log.t[0] + step * np.arange(n_samples)
-    changes: dict[str, Any] = {"t": grid}
-    for group in log.groups:
-        values = getattr(log, group)
-        changes[group] = np.column_stack(
-            [np.interp(grid, log.t, values[:, joint]) for joint in range(log.n_dof)]
-        )
-    if log.collision_id is not None:
-        previous = np.searchsorted(log.t, grid, side="right") - 1
-        changes["collision_id"] = log.collision_id[np.clip(previous, 0, log.n_samples - 1)]
-    metadata = dict(log.metadata)
-    metadata["sample_rate"] = 1.0 / step
-    metadata["resampled"] = {
-        "dt": step,
-        "method": "linear (collision_id: previous sample)",
-        "n_samples_before": log.n_samples,
-    }
-    changes["metadata"] = metadata
-    return dataclasses.replace(log, **changes)

@@ -2,7 +2,7 @@
 
 >>> import sensorless as sl
 >>> sl.robots.available()
-['lwr4', 'panda', 'panda_gaz', 'planar2', 'puma560']
+['lwr4', 'panda', 'panda_gaz', 'planar2', 'puma560', 'ur10', 'ur5']
 >>> sl.robots.load("planar2").n_dof
 2
 """

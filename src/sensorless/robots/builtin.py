@@ -14,7 +14,18 @@ from ..friction import CoulombViscous, Sigmoid
 from .lwr4 import lwr4
 from .model import LinkInertia, MotorData, RobotModel
 
-__all__ = ["BUILTIN", "lwr4", "panda", "panda_gaz", "panda_urdf_path", "planar2", "puma560"]
+__all__ = [
+    "BUILTIN",
+    "lwr4",
+    "panda",
+    "panda_gaz",
+    "panda_urdf_path",
+    "planar2",
+    "puma560",
+    "ur5",
+    "ur10",
+    "ur_urdf_path",
+]
 
 _HALF_PI = np.pi / 2
 
@@ -92,22 +103,31 @@ _PANDA_EFFORT = [87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0]
 _PANDA_JOINTS = [f"panda_joint{i}" for i in range(1, 8)]
 
 
-@cache
-def panda_urdf_path() -> Path:
-    """Path of ``panda.urdf`` shipped by the PyPI package ``example-robot-data``."""
+def _example_robot_data_file(suffix: str, what: str) -> Path:
+    """Path of the file of ``example-robot-data`` whose path ends with ``suffix``."""
     try:
         files = importlib.metadata.files("example-robot-data") or []
     except importlib.metadata.PackageNotFoundError:
         raise ModelError(
-            "the Panda URDF comes from the package example-robot-data; install it "
+            f"the {what} URDF comes from the package example-robot-data; install it "
             "(pip install example-robot-data)"
         ) from None
     for entry in files:
-        if str(entry).endswith("panda_description/urdf/panda.urdf"):
+        if str(entry).endswith(suffix):
             return Path(str(entry.locate()))
-    raise ModelError(
-        "example-robot-data is installed but ships no panda_description/urdf/panda.urdf"
-    )
+    raise ModelError(f"example-robot-data is installed but ships no {suffix}")
+
+
+@cache
+def panda_urdf_path() -> Path:
+    """Path of ``panda.urdf`` shipped by the PyPI package ``example-robot-data``."""
+    return _example_robot_data_file("panda_description/urdf/panda.urdf", "Panda")
+
+
+@cache
+def ur_urdf_path(model: str) -> Path:
+    """Path of ``<model>_robot.urdf`` (``"ur5"``, ``"ur10"``) shipped by ``example-robot-data``."""
+    return _example_robot_data_file(f"ur_description/urdf/{model}_robot.urdf", model.upper())
 
 
 def panda() -> RobotModel:
@@ -223,10 +243,74 @@ def planar2(
     )
 
 
+# Joint names of the Universal Robots URDFs (ur_description), base to wrist 3.
+_UR_JOINTS = [
+    "shoulder_pan_joint",
+    "shoulder_lift_joint",
+    "elbow_joint",
+    "wrist_1_joint",
+    "wrist_2_joint",
+    "wrist_3_joint",
+]
+
+
+def _ur_from_urdf(model: str) -> RobotModel:
+    return RobotModel.from_urdf(
+        ur_urdf_path(model),
+        _UR_JOINTS,
+        tip="tool0",
+        name=model,
+        description=f"Universal Robots {model.upper()}, URDF of example-robot-data, cut at "
+        "the flange",
+    )
+
+
+def ur10() -> RobotModel:
+    """Universal Robots UR10 (CB-series), the nominal model of its URDF.
+
+    Source: ``ur_description/urdf/ur10_robot.urdf`` of the PyPI package
+    ``example-robot-data`` (from ROS-Industrial's ``universal_robot``
+    description: UR's published link masses, with the centres of mass and
+    inertias of uniform cylinders along the links). This is the arm of the real
+    recordings in ``shared/data/ur10-ext_observer``. The arm is cut at the
+    flange ``tool0``. No friction and no armature (the URDF has neither).
+    Joint limits are the URDF's.
+
+    **Current-to-torque convention.** A UR joint reports its motor current
+    [A] (RTDE ``actual_current``), not a torque. The joint torque [N m] is
+    taken as ``gain · current``, one gain [N m/A] per joint lumping the
+    motor's torque constant and the gear ratio, in the joint directions of
+    this model: a positive current drives its joint towards positive q. The
+    importers apply the gains and write the log's ``tau_m`` in N m; the
+    UR10's are ``sensorless.io.UR_CURRENT_GAINS["ur10"]`` = (10.0, 10.6956,
+    8.4566, 9.0029, 9.48, 10.1232) N m/A, from the MIT-licensed project
+    ext_observer (S. Mikhel 2020, ``ur/test.cpp``). On its recording of the
+    standing arm (``ur-static.csv``), the mean of ``gain · current`` of the
+    shoulder and the elbow matches this model's gravity torque g(q) in sign
+    and to within 13 % of the largest entry of g.
+    """
+    return _ur_from_urdf("ur10")
+
+
+def ur5() -> RobotModel:
+    """Universal Robots UR5 (CB-series), the nominal model of its URDF.
+
+    Source: ``ur_description/urdf/ur5_robot.urdf`` of the PyPI package
+    ``example-robot-data`` (from ROS-Industrial's ``universal_robot``
+    description, as :func:`ur10`), cut at the flange ``tool0``, without
+    friction or armature; joint limits are the URDF's. The current-to-torque
+    convention is that of :func:`ur10`, but no published gains are known for
+    this arm: give them to the importers (``gains=``).
+    """
+    return _ur_from_urdf("ur5")
+
+
 BUILTIN: dict[str, Callable[..., RobotModel]] = {
     "lwr4": lwr4,
     "puma560": puma560,
     "panda": panda,
     "panda_gaz": panda_gaz,
     "planar2": planar2,
+    "ur10": ur10,
+    "ur5": ur5,
 }

@@ -86,8 +86,10 @@ def run_log(monitor: CollisionMonitor, log: Log, *, strict: bool) -> MonitorRun:
         group = "tau_j" if kind == "joint" else "tau_m"
         raise InputValueError(f"observer kind {kind!r} needs the {group} columns; the log has none")
     t, q = np.asarray(log.t), np.asarray(log.q)
+    # A measured velocity (real arms log it) replaces the estimate, as in ``observe``.
+    measured = None if kind == "acceleration" or log.qd is None else np.asarray(log.qd)
     n_samples, n_dof = q.shape
-    bad = monitor.limits.bad_rows(q, None, tau)
+    bad = monitor.limits.bad_rows(q, measured, tau)
     reasons: dict[int, str] = {}  # refused inside a segment, by sample index
     out = {name: np.full((n_samples, n_dof), np.nan) for name in _SERIES}
     settling = np.zeros(n_samples, dtype=bool)
@@ -98,7 +100,7 @@ def run_log(monitor: CollisionMonitor, log: Log, *, strict: bool) -> MonitorRun:
             start += 1
             continue
         stop = start + int(np.argmax(bad[start:])) if bad[start:].any() else n_samples
-        end, reason = _segment(monitor, t, q, tau, start, stop, out, settling, events)
+        end, reason = _segment(monitor, t, q, measured, tau, (start, stop), out, settling, events)
         if end < stop:  # a fault found inside the segment: refuse that sample, restart after it
             bad[end] = True
             reasons[end] = reason
@@ -120,7 +122,14 @@ def run_log(monitor: CollisionMonitor, log: Log, *, strict: bool) -> MonitorRun:
         robot=monitor.robot.name,
         position=q,
         acceleration=out["acceleration"] if kind == "acceleration" else None,
-        metadata={**log.metadata, "observer": monitor._observer.settings(), "faults": len(faults)},
+        metadata={
+            **log.metadata,
+            "observer": {
+                **monitor._observer.settings(),
+                "velocity": "filter" if measured is None else "measured",
+            },
+            "faults": len(faults),
+        },
     )
     return MonitorRun(signals, sorted(events, key=lambda e: e.start), faults, settling)
 
@@ -129,29 +138,34 @@ def _segment(
     monitor: CollisionMonitor,
     t: FloatArray,
     q: FloatArray,
+    measured: FloatArray | None,
     tau: FloatArray,
-    start: int,
-    stop: int,
+    span: tuple[int, int],
     out: dict[str, FloatArray],
     settling: np.ndarray,
     events: list[Event],
 ) -> tuple[int, str]:
-    """Run samples [start, stop) as one stream; return where it ended and why.
+    """Run samples [start, stop) = ``span`` as one stream; return where it ended and why.
 
     The stream ends early at the first sample the stream would refuse (a
     velocity estimate beyond its limit, a non-finite observer output); that
     index and the reason are returned, else ``(stop, "")``.
     """
+    start, stop = span
     block = slice(start, stop)
     estimator = monitor.estimator
     initial = estimator.initial_state(q[start])
     derivatives, _ = estimator._run(q[block], initial)
     velocity, acceleration = derivatives.velocity, derivatives.acceleration
+    if measured is not None:
+        velocity = measured[block]
     observer: Any = monitor._observer
     if monitor.settings.kind == "acceleration":
         signals, _ = observer._run_checked(t[block], q[block], tau[block], initial)
     else:
-        state = observer._initial_state_checked(q[start : start + 1], np.zeros((1, q.shape[1])))
+        # A measured velocity gives the observer its true start (no start-up excursion).
+        first = np.zeros((1, q.shape[1])) if measured is None else measured[start : start + 1]
+        state = observer._initial_state_checked(q[start : start + 1], first)
         signals, _ = observer._run_checked(
             t[block], q[block], np.ascontiguousarray(velocity), tau[block], state
         )
@@ -174,7 +188,9 @@ def _segment(
         )
         if k == 0:
             return end, reason
-        return _segment(monitor, t, q, tau, start, end, out, settling, events)[0], reason
+        return _segment(monitor, t, q, measured, tau, (start, end), out, settling, events)[
+            0
+        ], reason
     for name in _SERIES:
         values = acceleration if name == "acceleration" else getattr(signals, name)
         if values is not None:

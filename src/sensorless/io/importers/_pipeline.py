@@ -29,10 +29,10 @@ resampled.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, TypedDict, TypeVar
 
 import numpy as np
 import pandas as pd
@@ -477,3 +477,32 @@ def regularize(
             }
         logs.append(Log(t=segment.grid, metadata=metadata, **columns[index]))
     return logs
+
+
+TIMEBASE_DOC = """dt : float, optional
+        Sample period [s] of the logs; by default the median step.
+    gap_tolerance : float, optional
+        Longest step [s] within one log; longer steps cut the recording
+        into segments. By default 3 periods.
+
+    Returns
+    -------
+    list of Log
+        The segments of the recording, on regular grids, with the
+        provenance and the cleaning report in ``metadata["import"]`` (see
+        :mod:`sensorless.io.importers`)."""
+
+Importer = TypeVar("Importer", bound=Callable[..., Any])
+
+
+class Timebase(TypedDict, total=False):
+    """Keyword options every importer passes to :func:`regularize` (``dt``, ``gap_tolerance``)."""
+
+    dt: float | None
+    gap_tolerance: float | None
+
+
+def timebase_doc(function: Importer) -> Importer:
+    """Fill in the parameters every importer shares (``dt``, ``gap_tolerance``) and Returns."""
+    function.__doc__ = (function.__doc__ or "").replace("{timebase}", TIMEBASE_DOC)
+    return function

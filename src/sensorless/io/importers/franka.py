@@ -31,7 +31,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..._validation import check_dt
 from ...exceptions import DimensionError, InputTypeError, InputValueError, LogFormatError
 from ..log import Log
 from ._csv import (
@@ -42,9 +41,11 @@ from ._csv import (
     read_header,
     read_recording,
 )
-from ._pipeline import Provenance, regularize
+from ._pipeline import Provenance, Timebase, regularize, timebase_doc
 
 if TYPE_CHECKING:
+    from typing import Unpack
+
     from ...robots import RobotModel
 
 __all__ = ["FRANKA_COLUMNS", "import_franka"]
@@ -94,14 +95,14 @@ def _groups(
     return groups, conversions
 
 
+@timebase_doc
 def import_franka(
     path: str | Path,
     *,
     time_unit: str = "s",
     gravity_model: RobotModel | None = None,
     delimiter: str | None = None,
-    dt: float | None = None,
-    gap_tolerance: float | None = None,
+    **timebase: Unpack[Timebase],
 ) -> list[Log]:
     """Import a CSV file of libfranka ``RobotState`` fields (see the module docstring).
 
@@ -116,15 +117,7 @@ def import_franka(
         the commanded torque ``tau_m``; without it the log has no ``tau_m``.
     delimiter : str, optional
         Field separator; guessed from the header by default.
-    dt : float, optional
-        Sample period [s] of the logs; by default the median step.
-    gap_tolerance : float, optional
-        Longest step [s] within one log; by default 3 periods.
-
-    Returns
-    -------
-    list of Log
-        The segments of the recording (see :mod:`sensorless.io.importers`).
+    {timebase}
 
     Raises
     ------
@@ -140,8 +133,6 @@ def import_franka(
     """
     source = Path(path)
     scale = _time_scale(time_unit)
-    if dt is not None:
-        check_dt(dt)
     # Imported here: reading a file needs no robot model (nor Pinocchio).
     from ...robots import RobotModel
 
@@ -177,4 +168,4 @@ def import_franka(
         columns=columns,
         conversions=conversions,
     )
-    return regularize(recording, provenance, dt=dt, gap_tolerance=gap_tolerance)
+    return regularize(recording, provenance, **timebase)

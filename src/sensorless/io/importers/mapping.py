@@ -44,7 +44,7 @@ import importlib.resources
 import math
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import numpy as np
 import yaml
@@ -53,7 +53,10 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationEr
 from ...exceptions import InputValueError, UnknownNameError
 from ..log import Log
 from ._csv import TIME_SCALES, ColumnKey, CsvLayout, read_recording
-from ._pipeline import ColumnKind, Provenance, regularize
+from ._pipeline import ColumnKind, Provenance, Timebase, regularize, timebase_doc
+
+if TYPE_CHECKING:
+    from typing import Unpack
 
 __all__ = ["CsvSpec", "available_csv_specs", "import_csv", "load_csv_spec"]
 
@@ -300,12 +303,11 @@ def load_csv_spec(spec: CsvSpec | Mapping[str, Any] | str | Path) -> CsvSpec:
         raise InputValueError(f"invalid CSV import spec ({origin}): {_describe(exc)}") from None
 
 
+@timebase_doc
 def import_csv(
     path: str | Path,
     spec: CsvSpec | Mapping[str, Any] | str | Path,
-    *,
-    dt: float | None = None,
-    gap_tolerance: float | None = None,
+    **timebase: Unpack[Timebase],
 ) -> list[Log]:
     """Import a CSV file whose columns a spec describes.
 
@@ -315,18 +317,7 @@ def import_csv(
         The CSV file.
     spec : CsvSpec, mapping, str or Path
         As :func:`load_csv_spec`, e.g. ``"ur10_ext_observer"``.
-    dt : float, optional
-        Sample period [s] of the logs; by default the median step.
-    gap_tolerance : float, optional
-        Longest step [s] within one log; longer steps cut the recording
-        into segments. By default 3 periods.
-
-    Returns
-    -------
-    list of Log
-        The segments of the recording, on regular grids, with the
-        provenance and the cleaning report in ``metadata["import"]`` (see
-        :mod:`sensorless.io.importers`).
+    {timebase}
 
     Raises
     ------
@@ -378,4 +369,4 @@ def import_csv(
         conversions=conversions,
         robot=checked.robot,
     )
-    return regularize(recording, provenance, dt=dt, gap_tolerance=gap_tolerance)
+    return regularize(recording, provenance, **timebase)

@@ -38,13 +38,15 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..._validation import FloatArray, check_dt, per_joint
+from ..._validation import FloatArray, per_joint
 from ...exceptions import InputValueError, LogFormatError
 from ..columns import ANGLE_LIMIT, show_value
 from ..log import Log
-from ._pipeline import Provenance, Recording, RowBuffer, regularize
+from ._pipeline import Provenance, Recording, RowBuffer, Timebase, regularize, timebase_doc
 
 if TYPE_CHECKING:
+    from typing import Unpack
+
     from rosbags.interfaces import Connection
     from rosbags.typesys.store import Typestore
 
@@ -357,6 +359,7 @@ def _read(source: Path, topic: str | None, joints: Sequence[str] | None, stamp: 
     return _Messages(name, decoder, buffer.arrays(), skipped)
 
 
+@timebase_doc
 def import_ros2(
     path: str | Path,
     *,
@@ -366,8 +369,7 @@ def import_ros2(
     effort: str | None = "tau_m",
     effort_gains: ArrayLike | None = None,
     robot: str | None = None,
-    dt: float | None = None,
-    gap_tolerance: float | None = None,
+    **timebase: Unpack[Timebase],
 ) -> list[Log]:
     """Import the ``sensor_msgs/msg/JointState`` messages of a ROS 2 bag or MCAP file.
 
@@ -390,15 +392,7 @@ def import_ros2(
         gains if the driver publishes motor currents [A] (default 1: N m).
     robot : str, optional
         Robot name, stored as ``metadata["robot"]``.
-    dt : float, optional
-        Sample period [s] of the logs; by default the median step.
-    gap_tolerance : float, optional
-        Longest step [s] within one log; by default 3 periods.
-
-    Returns
-    -------
-    list of Log
-        The segments of the recording (see :mod:`sensorless.io.importers`).
+    {timebase}
 
     Raises
     ------
@@ -418,8 +412,6 @@ def import_ros2(
         raise InputValueError(
             f"effort must be one of {list(EFFORT_GROUPS)} or None; got {effort!r}"
         )
-    if dt is not None:
-        check_dt(dt)
     if not source.exists():
         raise FileNotFoundError(f"{source} does not exist")
     messages = _read(source, topic, joints, stamp)
@@ -473,4 +465,4 @@ def import_ros2(
         groups=groups,
         time_origin=origin // _NS + (origin % _NS) * 1e-9,
     )
-    return regularize(recording, provenance, dt=dt, gap_tolerance=gap_tolerance)
+    return regularize(recording, provenance, **timebase)

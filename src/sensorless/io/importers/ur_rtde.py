@@ -28,15 +28,18 @@ UR5, so its gains must be given.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from numpy.typing import ArrayLike
 
-from ..._validation import FloatArray, check_dt, per_joint
+from ..._validation import FloatArray, per_joint
 from ...exceptions import InputValueError, LogFormatError
 from ..log import Log
 from ._csv import CsvLayout, joint_columns, prefixed_groups, read_header, read_recording
-from ._pipeline import Provenance, regularize
+from ._pipeline import Provenance, Timebase, regularize, timebase_doc
+
+if TYPE_CHECKING:
+    from typing import Unpack
 
 __all__ = ["TORQUE_SOURCES", "UR_CURRENT_GAINS", "import_ur_rtde"]
 
@@ -82,6 +85,7 @@ def _current_gains(robot: str | None, gains: ArrayLike | None, n_dof: int) -> Fl
     return per_joint(UR_CURRENT_GAINS[robot], n_dof, f"UR_CURRENT_GAINS[{robot!r}]", "N m/A")
 
 
+@timebase_doc
 def import_ur_rtde(
     path: str | Path,
     *,
@@ -89,8 +93,7 @@ def import_ur_rtde(
     gains: ArrayLike | None = None,
     torque: str | None = "current",
     delimiter: str | None = None,
-    dt: float | None = None,
-    gap_tolerance: float | None = None,
+    **timebase: Unpack[Timebase],
 ) -> list[Log]:
     """Import a CSV file recorded through UR's RTDE interface (see the module docstring).
 
@@ -108,15 +111,7 @@ def import_ur_rtde(
         ``target_moment_*``, or none.
     delimiter : str, optional
         Field separator; guessed from the header by default.
-    dt : float, optional
-        Sample period [s] of the logs; by default the median step.
-    gap_tolerance : float, optional
-        Longest step [s] within one log; by default 3 periods.
-
-    Returns
-    -------
-    list of Log
-        The segments of the recording (see :mod:`sensorless.io.importers`).
+    {timebase}
 
     Raises
     ------
@@ -133,8 +128,6 @@ def import_ur_rtde(
         raise InputValueError(
             f"torque must be one of {list(TORQUE_SOURCES)} or None; got {torque!r}"
         )
-    if dt is not None:
-        check_dt(dt)
     names, sep = read_header(source, delimiter)
     groups = prefixed_groups(source, names, "timestamp", {"q": "actual_q_", "qd": "actual_qd_"})
     n_dof = len(groups["q"])
@@ -181,4 +174,4 @@ def import_ur_rtde(
         conversions=conversions,
         robot=robot,
     )
-    return regularize(recording, provenance, dt=dt, gap_tolerance=gap_tolerance)
+    return regularize(recording, provenance, **timebase)

@@ -5,7 +5,8 @@ Prints, in one process:
 * the Pinocchio floor of one observer step: ``crba`` + ``computeCoriolisMatrix``
   + ``computeGeneralizedGravity`` on one sample, median over the samples;
 * per threshold family, the median and p99 [µs] of ``CollisionMonitor.step``
-  and its ratio to the floor;
+  and its ratio to the floor, side by side for the Python path and the
+  compiled one (``backend="numba"``, where the family has it);
 * batch ``CollisionMonitor.run`` in samples/s beside the bare loop of the
   three Pinocchio calls over the same samples.
 
@@ -22,9 +23,11 @@ import numpy as np
 import pinocchio as pin
 
 from sensorless.monitor import CollisionMonitor, tune
+from sensorless.robots.recursion import numba_available
 from sensorless.simulation.scenario import load_scenario
 
 FAMILIES = ("constant", "time-variant", "hysteretic", "velocity", "model")
+COMPILED = ("constant", "time-variant", "hysteretic", "velocity")
 REPEATS = 5
 STREAM_SAMPLES = 3000
 
@@ -53,6 +56,15 @@ def stream_costs(monitor: CollisionMonitor, t, q, tau) -> list[float]:
     return out
 
 
+def step_cost(monitor: CollisionMonitor, t, q, tau) -> tuple[float, float]:
+    """Median and p99 [s] of one ``step`` after the settling window, median over the repeats."""
+    runs = [stream_costs(monitor, t, q, tau) for _ in range(REPEATS)]
+    settled = int(np.ceil(monitor.settle / monitor.dt))
+    median = statistics.median(statistics.median(r[settled:]) for r in runs)
+    p99 = statistics.median(float(np.percentile(r[settled:], 99)) for r in runs)
+    return median, p99
+
+
 def main() -> None:
     scenario = load_scenario("panda-gaz").with_duration(8.0)
     free = [scenario.run(seed=s, collisions=False).log for s in (1, 2)]
@@ -65,15 +77,21 @@ def main() -> None:
     floor = statistics.median(floors)
     print(f"Panda (7 joints), {n} samples, median of {REPEATS} runs")
     print(f"Pinocchio floor (crba + Coriolis + gravity, one sample): {1e6 * floor:.2f} µs")
-    print(f"{'family':<14}{'median µs':>11}{'p99 µs':>9}{'× floor':>9}")
+    columns = f"{'median µs':>11}{'p99 µs':>9}{'× floor':>9}"
+    print(f"{'':<14}{'python':^29}   {'numba':^29}")
+    print(f"{'family':<14}{columns}   {columns}")
     for method in FAMILIES:
         threshold, settings = tune(free, nominal, method, margin=0.05)
-        monitor = CollisionMonitor(nominal, threshold, settings)
-        runs = [stream_costs(monitor, log.t[:n], log.q[:n], log.tau_m[:n]) for _ in range(REPEATS)]
-        settled = int(np.ceil(monitor.settle / monitor.dt))
-        median = statistics.median(statistics.median(r[settled:]) for r in runs)
-        p99 = statistics.median(float(np.percentile(r[settled:], 99)) for r in runs)
-        print(f"{method:<14}{1e6 * median:>11.1f}{1e6 * p99:>9.1f}{median / floor:>9.1f}")
+        row = f"{method:<14}"
+        for backend in ("python", "numba"):
+            if backend == "numba" and (method not in COMPILED or not numba_available()):
+                row += f"   {'(Python path only)':^29}"
+                continue
+            monitor = CollisionMonitor(nominal, threshold, settings, backend=backend)
+            median, p99 = step_cost(monitor, log.t[:n], log.q[:n], log.tau_m[:n])
+            row += f"{'   ' if backend == 'numba' else ''}{1e6 * median:>11.2f}{1e6 * p99:>9.2f}"
+            row += f"{median / floor:>9.2f}"
+        print(row)
 
     threshold, settings = tune(free, nominal, "time-variant", margin=0.05)
     monitor = CollisionMonitor(nominal, threshold, settings)

@@ -19,9 +19,15 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from sensorless.monitor import CollisionMonitor, tune
+from sensorless.robots.recursion import numba_available
 from sensorless.simulation.scenario import load_scenario
 
 FAMILIES = ("constant", "time-variant", "hysteretic", "velocity", "model")
+COMPILED = ("constant", "time-variant", "hysteretic", "velocity")  # the numba stream's families
+needs_numba = pytest.mark.skipif(not numba_available(), reason="numba is not installed")
+CASES = [(m, "python") for m in FAMILIES] + [
+    pytest.param(m, "numba", marks=needs_numba) for m in COMPILED
+]
 N_GOOD = 120  # good samples per example, after the settling window
 DT = 1e-3
 
@@ -88,18 +94,18 @@ def bad_sample(
     return t, q, draw(_bad_value(n))
 
 
-@pytest.mark.parametrize("method", FAMILIES)
+@pytest.mark.parametrize(("method", "backend"), CASES)
 @settings(
     max_examples=25,
     deadline=None,
     suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
 )
 @given(data=st.data())
-def test_bad_samples_between_good_ones(setup, method, data) -> None:
+def test_bad_samples_between_good_ones(setup, method, backend, data) -> None:
     test, nominal, tuned = setup
     threshold, observer_settings = tuned[method]
-    clean = CollisionMonitor(nominal, threshold, observer_settings, policy=None)
-    fuzzed = CollisionMonitor(nominal, threshold, observer_settings, policy=None)
+    clean = CollisionMonitor(nominal, threshold, observer_settings, backend=backend)
+    fuzzed = CollisionMonitor(nominal, threshold, observer_settings, backend=backend)
     start = int(np.ceil(clean.settle / DT)) + 5
     first = data.draw(st.integers(0, test.n_samples - start - N_GOOD - 1), label="first")
     inserts = data.draw(

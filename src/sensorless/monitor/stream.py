@@ -4,21 +4,25 @@ A :class:`CollisionMonitor` applies a fitted threshold to a recorded log
 (:meth:`~CollisionMonitor.run`) or to a live stream one sample at a time
 (:meth:`~CollisionMonitor.step`), with the same result on the same samples.
 The fault, restart, settling and latching rules are those of
-:mod:`sensorless.monitor.policy`. Units SI and radians; time along axis 0.
+:mod:`sensorless.monitor.policy`. With numba installed, ``step`` runs one
+compiled function per sample (:mod:`sensorless.monitor._compiled`) for the
+families it covers; the Python path here is the reference it is tested
+against. Units SI and radians; time along axis 0.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, cast
+from types import ModuleType
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validation import FloatArray, as_sample, check_dt
 from ..detection import Detector, DetectorState, Verdict
-from ..exceptions import DimensionError, InputTypeError, InputValueError
+from ..exceptions import DimensionError, InputTypeError, InputValueError, UnknownNameError
 from ..io import Log
 from ..observers import AccelerationObserver, MomentumObserver, ObserverSample, ObserverState
 from ..robots.model import RobotModel
@@ -28,7 +32,22 @@ from .batch import FaultSpan, MonitorRun, run_log
 from .policy import StreamPolicy
 from .tuning import ObserverSettings
 
-__all__ = ["CollisionMonitor"]
+if TYPE_CHECKING:
+    from ._fused import FusedStream
+
+_fused: ModuleType | None
+try:
+    from . import _fused
+except ImportError:  # numba is an optional extra
+    _fused = None
+
+__all__ = ["BACKENDS", "CollisionMonitor"]
+
+#: Stream backends of :class:`CollisionMonitor`.
+BACKENDS = ("auto", "numba", "python")
+_STATUSES = ("ok", "collision", "settling")
+_OBSERVER_FAULT = "the observer's output is not finite for this sample"
+_BOUNDS_FAULT = "the threshold's bounds are not finite for this sample"
 
 
 @dataclass
@@ -62,6 +81,13 @@ class CollisionMonitor:
         closer than ``hold`` are one event (defaults 5 ms and 50 ms).
     policy : StreamPolicy, optional
         Time base, limits, settling and latching (see :mod:`sensorless.monitor.policy`).
+    backend : {"auto", "numba", "python"}
+        How :meth:`step` runs: ``"numba"`` one compiled function per sample
+        (:mod:`sensorless.monitor._compiled`; ``pip install sensorless[fast]``),
+        for momentum observers with the constant, time-variant, hysteretic or
+        velocity-based threshold; ``"python"`` the reference path of numpy
+        calls; ``"auto"`` numba where it can run. Both give the same verdicts,
+        and residuals and bounds within rounding.
 
     Raises
     ------
@@ -70,7 +96,10 @@ class CollisionMonitor:
     DimensionError
         The robot and the threshold have different joint counts.
     InputValueError
-        ``dt`` differs from the tuned period.
+        ``dt`` differs from the tuned period, or ``backend="numba"`` cannot run
+        (numba missing, or a monitor the compiled step does not cover).
+    UnknownNameError
+        An unknown ``backend``.
     """
 
     def __init__(
@@ -83,6 +112,7 @@ class CollisionMonitor:
         min_duration: float = 0.005,
         hold: float = 0.05,
         policy: StreamPolicy | None = None,
+        backend: str = "auto",
     ) -> None:
         if not isinstance(robot, RobotModel):
             raise InputTypeError(f"robot must be a RobotModel; got {type(robot).__name__}")
@@ -130,7 +160,31 @@ class CollisionMonitor:
         self._outputs = (False, True, needs_acceleration)
         self._early = self.policy.early * self.dt
         self._gap = self.policy.gap * self.dt
+        self._n_dof, self._joint = robot.n_dof, settings.kind == "joint"
+        self._fused = self._fused_stream(backend)
         self.reset()
+
+    def _fused_stream(self, backend: str) -> FusedStream | None:
+        """The compiled stream for ``backend``, or None for the Python path."""
+        if backend not in BACKENDS:
+            raise UnknownNameError(f"unknown backend {backend!r}; options: {list(BACKENDS)}")
+        if backend == "python":
+            return None
+        why = "numba is not installed (pip install sensorless[fast])"
+        if _fused is not None:
+            why = _fused.unsupported(self)
+        if why:
+            if backend == "numba":
+                raise InputValueError(f"backend 'numba' cannot run this monitor: {why}")
+            return None
+        assert _fused is not None  # why is empty only with numba
+        fused: FusedStream = _fused.FusedStream(self)
+        return fused
+
+    @property
+    def backend(self) -> str:
+        """``"numba"`` or ``"python"``: how :meth:`step` runs."""
+        return "python" if self._fused is None else "numba"
 
     # ----------------------------------------------------------------- batch
     def run(self, log: Log) -> tuple[ObserverSignals, list[Event]]:
@@ -176,11 +230,13 @@ class CollisionMonitor:
         self._floor = -math.inf  # no sample may come at or before this time
         self._latched = False
         self._inside_since = math.nan
+        if self._fused is not None:
+            self._fused.reset()
 
     @property
     def latched(self) -> bool:
         """Whether a collision verdict is latched (until :meth:`reset` or the release rule)."""
-        return self._latched
+        return self._latched if self._fused is None else self._fused.latched
 
     def step(
         self, t: float, q: ArrayLike, tau_m: ArrayLike, tau_j: ArrayLike | None = None
@@ -207,12 +263,14 @@ class CollisionMonitor:
         """
         try:
             time = float(t)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             return self._fault(math.nan, f"time must be a number of seconds; got {t!r}")
         if not math.isfinite(time):
             return self._fault(time, f"time must be finite; got {time}")
+        if self._fused is not None:
+            return self._step_fused(self._fused, time, q, tau_m, tau_j)
         if time <= self._floor:
-            return self._fault(time, f"time must increase: {time!r} s after {self._floor!r} s")
+            return self._fault(time, self._back_message(time, self._floor))
         q_arr, tau, message = self._sample(q, tau_m, tau_j)
         if message:
             self._pending = time
@@ -222,23 +280,69 @@ class CollisionMonitor:
         if stream is not None:
             step = time - stream.t
             if step < self._early:
-                return self._fault(
-                    time, f"time step {step:.6g} s is shorter than {self._early:.6g} s (dt/2)"
-                )
+                return self._fault(time, self._early_message(step))
             if step > self._gap:
                 if self._early <= time - self._pending <= self._gap:
                     restart = True  # the stream resumed after a real gap
                 else:
                     self._pending = time
-                    return self._fault(
-                        time,
-                        f"gap: {step:.6g} s since the last sample; expected dt = {self.dt:g} s "
-                        "(time in ms, or a dropped sample?)",
-                    )
+                    return self._fault(time, self._gap_message(step))
         try:
             return self._judge(stream, restart, time, q_arr, tau)
         except Exception as exc:  # fail-safe: no data may crash the stream
             return self._fault(time, f"the sample could not be processed: {exc!r}")
+
+    def _back_message(self, time: float, floor: float) -> str:
+        return f"time must increase: {time!r} s after {floor!r} s"
+
+    def _early_message(self, step: float) -> str:
+        return f"time step {step:.6g} s is shorter than {self._early:.6g} s (dt/2)"
+
+    def _gap_message(self, step: float) -> str:
+        return (
+            f"gap: {step:.6g} s since the last sample; expected dt = {self.dt:g} s "
+            "(time in ms, or a dropped sample?)"
+        )
+
+    def _step_fused(
+        self, fused: FusedStream, time: float, q: Any, tau_m: Any, tau_j: Any
+    ) -> Verdict:
+        """:meth:`step` for a finite time, on the compiled path (which checks the floor)."""
+        n = self._n_dof
+        q_arr, message = as_sample(q, n, "q")
+        tau_arr, message_m = as_sample(tau_m, n, "tau_m")
+        sensed, message_j = as_sample(tau_j, n, "tau_j") if self._joint else (tau_arr, "")
+        if message or message_m or message_j:  # the Python rules say which, in their order
+            if time <= fused.floor:
+                return self._fault(time, self._back_message(time, fused.floor))
+            fused.refuse(time)
+            return self._fault(time, self._sample(q, tau_m, tau_j)[2])
+        out = np.empty((3, n))
+        try:
+            status, joints, event = fused.run(
+                time, q_arr, tau_arr, sensed, out, self.threshold.name
+            )
+        except Exception as exc:  # fail-safe: no data may crash the stream
+            return self._fault(time, f"the sample could not be processed: {exc!r}")
+        if status in _STATUSES:
+            return Verdict(cast(Any, status), time, joints, out[0], out[1], out[2], event)
+        return self._fault(time, self._fused_fault(fused, status, time, (q_arr, tau_arr, sensed)))
+
+    def _fused_fault(
+        self, fused: FusedStream, reason: str, time: float, sample: tuple[FloatArray, ...]
+    ) -> str:
+        """The message of a fault the compiled step found: that of the Python path."""
+        if reason in ("q", "tau_m", "tau_j"):
+            return self.limits.describe(reason, sample[("q", "tau_m", "tau_j").index(reason)])
+        if reason == "qd":
+            return self.limits.describe("qd", fused.velocity)
+        if reason == "time":
+            return self._back_message(time, fused.floor)
+        if reason == "early":
+            return self._early_message(time - fused.last)
+        if reason == "gap":
+            return self._gap_message(time - fused.last)
+        return _OBSERVER_FAULT if reason == "observer" else _BOUNDS_FAULT
 
     def _sample(self, q: Any, tau_m: Any, tau_j: Any) -> tuple[FloatArray, FloatArray, str]:
         """The checked position and torque of one sample, or a fault message."""
@@ -298,7 +402,7 @@ class CollisionMonitor:
             acceleration is not None and not np.isfinite(acceleration).all()
         ):
             self._pending = time
-            return self._fault(time, "the observer's output is not finite for this sample")
+            return self._fault(time, _OBSERVER_FAULT)
         residual, model_torque, friction, sign = sample
         settling = time - stream.start < self.settle
         detector = stream.detector
@@ -319,7 +423,7 @@ class CollisionMonitor:
             verdict, detector = self.detector._step_checked(detector, residual, inputs, time)
             if np.isnan(verdict.lower).any() or np.isnan(verdict.upper).any():
                 self._pending = time
-                return self._fault(time, "the threshold's bounds are not finite for this sample")
+                return self._fault(time, _BOUNDS_FAULT)
             if closed is not None and verdict.event is None:
                 verdict = _with(verdict, verdict.status, closed)
             verdict = self._latch(verdict)
@@ -354,11 +458,13 @@ class CollisionMonitor:
         return _with(verdict, "collision", verdict.event)
 
     def _fault(self, time: float, message: str) -> Verdict:
-        nan = np.full(self.robot.n_dof, np.nan)
+        nan = np.full(self._n_dof, np.nan)
         return Verdict("fault", time, (), nan, nan.copy(), nan.copy(), None, message)
 
     def finish(self) -> Event | None:
         """Close the stream: the event still open, if any."""
+        if self._fused is not None:
+            return self._fused.finish(self.threshold.name)
         stream = self._stream
         if stream is None or stream.detector is None:
             return None

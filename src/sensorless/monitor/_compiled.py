@@ -1,0 +1,382 @@
+"""One compiled (numba) function per stream sample: the stream of :mod:`.stream`, fused.
+
+Importing this module requires numba; without it :class:`~sensorless.monitor.CollisionMonitor`
+runs its Python stream. For one sample whose types and shapes
+:func:`~sensorless._validation.as_sample` has checked, :func:`fused_step` does
+what :meth:`CollisionMonitor.step` does with numbers, in the same order and
+with the same arithmetic: the time and value rules of :mod:`.policy`; the
+velocity cascade of the ``CausalEstimator`` (``_step_outputs``); p, Cᵀq̇ and
+g by the O(n) recursion (``terms_at`` of :mod:`sensorless.robots._recursion_numba`)
+and the update of ``MomentumObserver._step_checked``; after the settling
+window, the bounds of the constant, time-variant (forms "friction" and
+"hysteretic") and velocity-based thresholds (their ``_process_checked``), the
+events of ``Detector._step_checked`` and the latch. The new state is written
+to scratch rows and committed only when the sample was good from end to end:
+a fault changes nothing but the time of the last refused sample (``PENDING``,
+the gap rule's memory). Joints travel as bit masks (bit j: joint j + 1).
+Units SI and radians.
+
+Two flat float64 arrays per stream (packed by :class:`~sensorless.monitor._fused.FusedStream`),
+sliced into views by the kernel, since each array argument costs about 0.1 µs per call:
+
+``model`` (read-only)
+    The header (``DT`` … ``TABLE_AT``); the velocity sections (n_sections × 6)
+    and their unit initial states (n_sections × 2); the velocity bin edges
+    [rad/s]; ``const`` (n_dof, ``N_CONST``): per joint ``kernel_constants`` of
+    the recursion (columns 0–27), then the columns named below; ``table``
+    (3, n_bins, n_dof): τ̂_fme, L and U of the velocity-based threshold [N m].
+``buffers``
+    ``flags`` (3, ``N_FLAGS``): committed (0) and scratch (1) scalars, and the
+    event that closed at the sample (2); ``state`` (2, n_rows, n_dof):
+    committed and scratch rows, the estimator's section states from row
+    ``SECTIONS`` on; ``work`` (n_dof, 23): scratch of ``terms_at``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numba import njit, types
+
+from .._validation import FloatArray
+from ..robots._recursion_numba import terms_at
+
+__all__ = ["REASONS", "SIGNATURE", "STATUSES", "fused_step"]
+
+# model header
+DT, EARLY, GAP, SETTLE, RELEASE, MIN_DURATION, HOLD, JOINT = range(8)
+FRICTION, FAMILY, EXTRA, N_SECTIONS, N_EDGES, CONST_AT, TABLE_AT = range(8, 15)
+HEADER = 15
+# const columns after the recursion's 28; FRICTION_PARAMETERS has five
+CENTRE, HALF_RANGE, SPEED_LIMIT, TORQUE_LIMIT, POLE, WEIGHT, FRICTION_PARAMETERS = range(28, 35)
+MONITORED, WIDTH, GAMMA, COEFFICIENT, BIN_POLE, BIN_WEIGHT = range(39, 45)
+VISITED_LOW, VISITED_HIGH, N_CONST = 45, 46, 47
+# state rows: the ObserverState fields, the threshold's filter state, q̂̇, p/Cᵀq̇/g, sections
+MOMENTUM, COR_GRAVITY, FRICTION_TORQUE, SIGN, TORQUE = range(5)
+RESIDUAL, MODEL_TORQUE, FILTERED_FRICTION, FILTERED_SIGN = range(5, 9)
+BIN_STATE, VELOCITY, TERMS, SECTIONS = 9, 10, 11, 14
+# flags; row 2 holds a closed event in the OPEN... fields
+HAS_STREAM, START, T_LAST, FLOOR, PENDING, LATCHED, INSIDE_SINCE, HAS_DETECTOR = range(8)
+OUTSIDE, OPEN, OPEN_START, OPEN_END, OPEN_JOINTS, OPEN_PEAK, OPEN_PEAK_RESIDUAL = range(8, 15)
+N_FLAGS = 15
+# friction kinds, threshold families
+NO_FRICTION, COULOMB, VISCOUS, COULOMB_VISCOUS, STRIBECK, SIGMOID, HYSTERETIC = range(7)
+CONSTANT, TIME_VARIANT, HYSTERETIC_FORM, VELOCITY_BINS = range(4)
+# codes: status (low 4 bits; faults from FAULT on), EVENT bit, joints mask from JOINTS_SHIFT on
+OK, COLLISION, SETTLING, FAULT_TIME, FAULT_Q, FAULT_TAU_M, FAULT_TAU_J = range(7)
+FAULT_EARLY, FAULT_GAP, FAULT_VELOCITY, FAULT_OBSERVER, FAULT_BOUNDS = range(7, 12)
+FAULT, EVENT, JOINTS_SHIFT = FAULT_TIME, 16, 5
+MAX_JOINTS = 58  # the joints mask fits in an int64 beside the status bits
+STATUSES = ("ok", "collision", "settling")
+REASONS = ("time", "q", "tau_m", "tau_j", "early", "gap", "qd", "observer", "bounds")
+"""What a fault refused: a time not past the last, a limit, a time rule, a non-finite result."""
+
+_READ = types.Array(types.float64, 1, "C", readonly=True)
+SIGNATURE = types.int64(
+    types.float64, _READ, _READ, _READ, _READ,
+    types.Array(types.float64, 1, "C"), types.Array(types.float64, 2, "C"),
+)  # fmt: skip
+"""Arguments of :func:`fused_step`; writable arrays convert to its read-only types."""
+
+
+@njit(cache=True)
+def _expit(x: float) -> float:
+    """1 / (1 + exp(−x)) without overflow."""
+    if x >= 0.0:
+        return 1.0 / (1.0 + math.exp(-x))
+    z = math.exp(x)
+    return z / (1.0 + z)
+
+
+@njit(cache=True)
+def _sign(x: float) -> float:
+    return 1.0 if x > 0.0 else (-1.0 if x < 0.0 else 0.0)
+
+
+@njit(cache=True)
+def friction_torque(kind: int, const: FloatArray, j: int, v: float) -> float:
+    """τ̂_fr(q̇) [N m] of joint j: ``kind`` and the parameters ``const[j, FRICTION_PARAMETERS:]``.
+
+    The parameters are indexed, not sliced: a view per joint and sample cost
+    more than the arithmetic.
+    """
+    if kind == NO_FRICTION:
+        return 0.0
+    c0, c1 = const[j, FRICTION_PARAMETERS], const[j, FRICTION_PARAMETERS + 1]
+    c2 = const[j, FRICTION_PARAMETERS + 2]
+    if kind == COULOMB or kind == COULOMB_VISCOUS:
+        coulomb = c0 if v > 0.0 else (c1 if v < 0.0 else 0.0)
+        return coulomb + c2 * v if kind == COULOMB_VISCOUS else coulomb
+    if kind == VISCOUS:
+        return c0 * v
+    if kind == STRIBECK:
+        fv, delta = const[j, FRICTION_PARAMETERS + 3], const[j, FRICTION_PARAMETERS + 4]
+        level = c0 + (c1 - c0) * math.exp(-((abs(v) / c2) ** delta))
+        return _sign(v) * level + fv * v
+    if kind == SIGMOID:
+        return c0 * _expit(c1 * (v + c2)) - c0 * _expit(c1 * c2)
+    return -c0 * _sign(v)
+
+
+@njit(cache=True)
+def _close(source: FloatArray, min_duration: float, event: FloatArray) -> None:
+    """Copy the open event of ``source`` to ``event`` if it lasted ``min_duration`` [s]."""
+    if source[OPEN] != 0.0 and source[OPEN_END] - source[OPEN_START] >= min_duration:
+        event[OPEN:N_FLAGS] = source[OPEN:N_FLAGS]
+
+
+@njit(cache=True)
+def _bin(model: FloatArray, v: float) -> int:
+    """Velocity bin of ``v`` [rad/s] (``searchsorted(edges, v, "right") − 1``, clipped)."""
+    n_edges = int(model[N_EDGES])
+    base = HEADER + 8 * int(model[N_SECTIONS])  # after the sections and their unit states
+    low, high = 0, n_edges
+    while low < high:
+        middle = (low + high) // 2
+        if model[base + middle] <= v:
+            low = middle + 1
+        else:
+            high = middle
+    return min(max(low - 1, 0), n_edges - 2)
+
+
+@njit(cache=True)
+def _terms(q: FloatArray, const: FloatArray, s: Any, work: Any) -> None:
+    """p, Cᵀq̇ and g at (q, the row ``VELOCITY`` of ``s``) into the rows ``TERMS`` of ``s``."""
+    n = q.shape[0]
+    velocity = s[VELOCITY : VELOCITY + 1]
+    terms_at(0, q.reshape((1, n)), velocity, const, work, s[TERMS:SECTIONS].reshape((3, 1, n)))
+
+
+@njit(cache=True)
+def _restart(q: FloatArray, const: FloatArray, model: FloatArray, s: FloatArray, work: Any) -> None:
+    """Initial estimator and observer states at ``q``, at rest, into the rows ``s``."""
+    n = q.shape[0]
+    zi_at = HEADER + 6 * int(model[N_SECTIONS])
+    kind = int(model[FRICTION])
+    s[VELOCITY] = 0.0
+    _terms(q, const, s, work)
+    for j in range(n):
+        vg = s[TERMS + 1, j] - s[TERMS + 2, j]
+        fr = friction_torque(kind, const, j, 0.0)
+        s[MOMENTUM, j], s[COR_GRAVITY, j], s[FRICTION_TORQUE, j] = s[TERMS, j], vg, fr
+        s[SIGN, j], s[TORQUE, j] = 0.0, fr - vg
+        s[RESIDUAL, j], s[MODEL_TORQUE, j], s[FILTERED_FRICTION, j] = 0.0, -vg, fr
+        s[FILTERED_SIGN, j] = 0.0
+        for row in range(2 * int(model[N_SECTIONS])):
+            s[SECTIONS + row, j] = model[zi_at + row] * q[j]
+
+
+@njit(cache=True)
+def _observe(
+    q: FloatArray, tau: FloatArray, const: FloatArray, model: FloatArray, s: Any, work: Any
+) -> bool:
+    """Estimator, recursion and observer update in place on the rows ``s``; False if not finite."""
+    n = q.shape[0]
+    dt = model[DT]
+    for j in range(n):
+        y = q[j]
+        for k in range(int(model[N_SECTIONS])):
+            b = HEADER + 6 * k
+            z0, z1 = s[SECTIONS + 2 * k, j], s[SECTIONS + 2 * k + 1, j]
+            out = model[b] * y + z0
+            s[SECTIONS + 2 * k, j] = model[b + 1] * y - model[b + 4] * out + z1
+            s[SECTIONS + 2 * k + 1, j] = model[b + 2] * y - model[b + 5] * out
+            y = out
+        s[VELOCITY, j] = y / dt
+    for j in range(n):
+        if not abs(s[VELOCITY, j]) <= const[j, SPEED_LIMIT]:
+            return False
+    _terms(q, const, s, work)
+    kind = int(model[FRICTION])
+    for j in range(n):
+        v = s[VELOCITY, j]
+        p1, vg1 = s[TERMS, j], s[TERMS + 1, j] - s[TERMS + 2, j]
+        fr1 = friction_torque(kind, const, j, v)
+        s1 = _sign(v)
+        h = (p1 - s[MOMENTUM, j]) / dt - 0.5 * (s[COR_GRAVITY, j] + vg1)
+        f = (s[FRICTION_TORQUE, j] + fr1) * 0.5
+        g = (s[SIGN, j] + s1) * 0.5
+        r = (h + f) - s[TORQUE, j]
+        a, w = const[j, POLE], const[j, WEIGHT]
+        s[RESIDUAL, j] = w * r + a * s[RESIDUAL, j]
+        s[MODEL_TORQUE, j] = w * h + a * s[MODEL_TORQUE, j]
+        s[FILTERED_FRICTION, j] = w * f + a * s[FILTERED_FRICTION, j]
+        s[FILTERED_SIGN, j] = w * g + a * s[FILTERED_SIGN, j]
+        s[MOMENTUM, j], s[COR_GRAVITY, j], s[FRICTION_TORQUE, j] = p1, vg1, fr1
+        s[SIGN, j], s[TORQUE, j] = s1, tau[j]
+    for row in range(RESIDUAL, RESIDUAL + 4):
+        for j in range(n):
+            if not math.isfinite(s[row, j]):
+                return False
+    return True
+
+
+@njit(cache=True)
+def _bounds(
+    const: FloatArray, table: FloatArray, model: FloatArray, s: Any, start: bool, out: Any
+) -> bool:
+    """Bounds of the threshold into out[1], out[2]; False if one is NaN."""
+    family = int(model[FAMILY])
+    for j in range(s.shape[1]):
+        h = s[MODEL_TORQUE, j]
+        if family == CONSTANT:
+            upper = const[j, WIDTH]
+            lower = -upper
+        elif family == VELOCITY_BINS:
+            v = s[VELOCITY, j]
+            k = _bin(model, v)
+            if start:  # the filter starts with this sample's bin held since forever
+                s[BIN_STATE, j] = table[0, k, j]
+            friction = s[BIN_STATE, j]
+            s[BIN_STATE, j] = const[j, BIN_WEIGHT] * table[0, k, j] + const[j, BIN_POLE] * friction
+            centre = const[j, GAMMA] * h + friction
+            lower = table[1, k, j] + centre
+            upper = table[2, k, j] + centre
+            if model[EXTRA] > 0.0 and (v < const[j, VISITED_LOW] or v >= const[j, VISITED_HIGH]):
+                lower = lower - model[EXTRA]
+                upper = upper + model[EXTRA]
+        else:
+            if family == TIME_VARIANT:
+                centre = const[j, GAMMA] * h + const[j, COEFFICIENT] * s[FILTERED_FRICTION, j]
+            else:
+                centre = const[j, GAMMA] * h - const[j, COEFFICIENT] * s[FILTERED_SIGN, j]
+            lower = centre - const[j, WIDTH]
+            upper = centre + const[j, WIDTH]
+        if const[j, MONITORED] == 0.0:
+            lower, upper = -np.inf, np.inf
+        if math.isnan(lower) or math.isnan(upper):
+            return False
+        out[1, j], out[2, j] = lower, upper
+    return True
+
+
+@njit(cache=True)
+def _detect(
+    time: float, const: FloatArray, model: FloatArray, out: Any, new: Any, event: Any
+) -> int:
+    """``Detector._step_checked`` and the latch on the flags ``new``: status | joints mask."""
+    mask, best, worst = 0, -1, 0.0
+    for j in range(out.shape[1]):
+        if const[j, MONITORED] != 0.0:
+            excursion = max(out[0, j] - out[2, j], out[1, j] - out[0, j])
+            if excursion > 0.0:
+                mask |= 1 << j
+            if best < 0 or excursion > worst:
+                best, worst = j, excursion
+    if mask:
+        if new[OPEN] != 0.0 and (new[OUTSIDE] != 0.0 or time - new[OPEN_END] < model[HOLD]):
+            new[OPEN_END] = time
+            new[OPEN_JOINTS] = float(int(new[OPEN_JOINTS]) | mask)
+            if not worst <= new[OPEN_PEAK]:
+                new[OPEN_PEAK], new[OPEN_PEAK_RESIDUAL] = worst, out[0, best]
+        else:
+            _close(new, model[MIN_DURATION], event)
+            new[OPEN], new[OPEN_START], new[OPEN_END] = 1.0, time, time
+            new[OPEN_JOINTS], new[OPEN_PEAK], new[OPEN_PEAK_RESIDUAL] = mask, worst, out[0, best]
+    elif new[OPEN] != 0.0 and time - new[OPEN_END] >= model[HOLD]:
+        _close(new, model[MIN_DURATION], event)
+        new[OPEN] = 0.0
+    new[OUTSIDE] = 1.0 if mask else 0.0
+    confirmed = mask != 0 and new[OPEN] != 0.0 and time - new[OPEN_START] >= model[MIN_DURATION]
+    if confirmed:
+        new[LATCHED], new[INSIDE_SINCE] = 1.0, np.nan
+        return COLLISION | mask << JOINTS_SHIFT
+    if new[LATCHED] != 0.0 and not math.isnan(model[RELEASE]):
+        if mask:
+            new[INSIDE_SINCE] = np.nan
+        elif math.isnan(new[INSIDE_SINCE]):
+            new[INSIDE_SINCE] = time
+        if time - new[INSIDE_SINCE] >= model[RELEASE]:
+            new[LATCHED], new[INSIDE_SINCE] = 0.0, np.nan
+    status = COLLISION if new[LATCHED] != 0.0 else OK
+    return status | mask << JOINTS_SHIFT
+
+
+@njit(cache=True)
+def fused_step(
+    time: float,
+    q: FloatArray,
+    tau_m: FloatArray,
+    tau_j: FloatArray,
+    model: FloatArray,
+    buffers: FloatArray,
+    out: FloatArray,
+) -> int:
+    """One sample of the stream; returns status | ``EVENT`` | joints mask << ``JOINTS_SHIFT``.
+
+    ``time`` [s] is finite; ``q`` [rad], ``tau_m`` and ``tau_j`` [N m] have
+    shape (n_dof,) (``tau_j`` is ``tau_m`` for the motor-torque observer).
+    ``out`` (3, n_dof) receives the residual and the bounds [N m] (NaN bounds
+    while settling).
+    """
+    n = q.shape[0]
+    n_rows = SECTIONS + 2 * int(model[N_SECTIONS])
+    table_at = int(model[TABLE_AT])
+    const = model[int(model[CONST_AT]) : table_at].reshape((n, N_CONST))
+    table = model[table_at:].reshape((3, (model.shape[0] - table_at) // (3 * n), n))
+    flags = buffers[: 3 * N_FLAGS].reshape((3, N_FLAGS))
+    end = 3 * N_FLAGS + 2 * n_rows * n
+    state = buffers[3 * N_FLAGS : end].reshape((2, n_rows, n))
+    work = buffers[end:].reshape((n, 23))
+    old = flags[0]
+    if time <= old[FLOOR]:
+        return FAULT_TIME
+    for j in range(n):
+        if not abs(q[j] - const[j, CENTRE]) <= const[j, HALF_RANGE]:
+            old[PENDING] = time
+            return FAULT_Q
+    for j in range(n):
+        if not abs(tau_m[j]) <= const[j, TORQUE_LIMIT]:
+            old[PENDING] = time
+            return FAULT_TAU_M
+    joint = model[JOINT] != 0.0
+    for j in range(n if joint else 0):
+        if not abs(tau_j[j]) <= const[j, TORQUE_LIMIT]:
+            old[PENDING] = time
+            return FAULT_TAU_J
+    restart = old[HAS_STREAM] == 0.0
+    if not restart:
+        step = time - old[T_LAST]
+        if step < model[EARLY]:
+            return FAULT_EARLY
+        if step > model[GAP]:
+            if model[EARLY] <= time - old[PENDING] <= model[GAP]:
+                restart = True  # the stream resumed after a real gap
+            else:
+                old[PENDING] = time
+                return FAULT_GAP
+    new, event, rows = flags[1], flags[2], state[1]
+    new[:] = old
+    event[OPEN] = 0.0
+    if restart:
+        if old[HAS_STREAM] != 0.0 and old[HAS_DETECTOR] != 0.0:
+            _close(old, model[MIN_DURATION], event)
+        _restart(q, const, model, rows, work)
+        new[HAS_STREAM], new[START], new[HAS_DETECTOR] = 1.0, time, 0.0
+    else:
+        rows[:] = state[0]
+    if not _observe(q, tau_j if joint else tau_m, const, model, rows, work):
+        old[PENDING] = time
+        for j in range(n):
+            if not abs(rows[VELOCITY, j]) <= const[j, SPEED_LIMIT]:
+                return FAULT_VELOCITY
+        return FAULT_OBSERVER
+    out[0] = rows[RESIDUAL]
+    if time - new[START] < model[SETTLE]:
+        out[1:] = np.nan
+        code = SETTLING
+    else:
+        start = new[HAS_DETECTOR] == 0.0
+        if start:
+            new[HAS_DETECTOR], new[OUTSIDE], new[OPEN] = 1.0, 0.0, 0.0
+        if not _bounds(const, table, model, rows, start, out):
+            old[PENDING] = time
+            return FAULT_BOUNDS
+        code = _detect(time, const, model, out, new, event)
+    new[T_LAST], new[FLOOR], new[PENDING] = time, time, -np.inf
+    old[:] = new
+    state[0] = rows
+    return code | (EVENT if event[OPEN] != 0.0 else 0)

@@ -1,0 +1,219 @@
+"""The Python side of the compiled stream: pack a monitor's parts, read the verdict back.
+
+:class:`FusedStream` lays the constants of a
+:class:`~sensorless.monitor.CollisionMonitor` (estimator, observer, threshold,
+limits, policy) into the flat arrays :func:`~sensorless.monitor._compiled.fused_step`
+reads, holds its state buffers and turns its return code into a status,
+joints and an event; each call costs about 0.1 µs per array argument, hence
+two flat arrays. :func:`unsupported` says which monitors it covers.
+Importing this module requires numba. Units SI and radians.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .._validation import FloatArray
+from ..friction import Coulomb, CoulombViscous, HystereticError, Sigmoid, Stribeck, Viscous
+from ..friction.static import FrictionModel
+from ..signals import Event
+from ..thresholds import ConstantThreshold, Threshold, TimeVariantThreshold, VelocityThreshold
+from . import _compiled as kernel
+
+if TYPE_CHECKING:
+    from .stream import CollisionMonitor
+
+__all__ = ["FusedStream", "unsupported"]
+
+_FRICTIONS: dict[type, tuple[int, tuple[str, ...]]] = {
+    Coulomb: (kernel.COULOMB, ("c_pos", "c_neg")),
+    Viscous: (kernel.VISCOUS, ("fv",)),
+    CoulombViscous: (kernel.COULOMB_VISCOUS, ("c_pos", "c_neg", "fv")),
+    Stribeck: (kernel.STRIBECK, ("fc", "fs", "vs", "fv", "delta")),
+    Sigmoid: (kernel.SIGMOID, ("phi1", "phi2", "phi3")),
+    HystereticError: (kernel.HYSTERETIC, ("c",)),
+}
+_FAMILIES = (ConstantThreshold, TimeVariantThreshold, VelocityThreshold)
+# Bound once: each attribute lookup on the module costs as much as a line of arithmetic.
+_fused_step, _FAULT, _EVENT = kernel.fused_step, kernel.FAULT, kernel.EVENT
+_JOINTS_SHIFT, _REASONS, _STATUSES = kernel.JOINTS_SHIFT, kernel.REASONS, kernel.STATUSES
+
+
+def unsupported(monitor: CollisionMonitor) -> str:
+    """Why the compiled stream cannot run ``monitor`` ("" when it can)."""
+    kind, threshold, n_dof = monitor.settings.kind, monitor.threshold, monitor.robot.n_dof
+    friction = getattr(monitor._observer, "friction_model", None)
+    if kind not in ("motor", "joint"):
+        return f"the {kind!r} observer runs on the Python path only"
+    if type(threshold) not in _FAMILIES:
+        return f"the {threshold.name!r} threshold family runs on the Python path only"
+    if friction is not None and type(friction) not in _FRICTIONS:
+        return f"the friction model {type(friction).__name__} runs on the Python path only"
+    if n_dof > kernel.MAX_JOINTS:
+        return (
+            f"the compiled stream handles at most {kernel.MAX_JOINTS} joints; the robot has {n_dof}"
+        )
+    return ""
+
+
+class FusedStream:
+    """The two arrays of one monitor's compiled stream, and what reads them.
+
+    Parameters
+    ----------
+    monitor : CollisionMonitor
+        A monitor :func:`unsupported` accepts; its estimator, momentum
+        observer, fitted threshold, detector, limits, policy and settling
+        window are read once.
+    """
+
+    def __init__(self, monitor: CollisionMonitor) -> None:
+        observer, policy, detector = monitor._observer, monitor.policy, monitor.detector
+        n, dt = observer.n_dof, observer.dt
+        sos = monitor.estimator.sos_velocity
+        zi_unit = monitor.estimator._zi_unit[1]  # the velocity cascade's sosfilt_zi
+        friction, parameters = _friction(observer.friction_model, n)
+        family, const, table, edges, extra = _threshold(monitor.threshold, dt, n)
+        limits = monitor.limits
+        const[:, :28] = observer._kernel.kernel_constants
+        const[:, kernel.CENTRE], const[:, kernel.HALF_RANGE] = limits.centre, limits.half_range
+        const[:, kernel.SPEED_LIMIT], const[:, kernel.TORQUE_LIMIT] = limits.velocity, limits.torque
+        const[:, kernel.POLE], const[:, kernel.WEIGHT] = observer._pole, observer._weight
+        const[:, kernel.FRICTION_PARAMETERS : kernel.MONITORED] = parameters
+        const[np.asarray(detector.monitored_joints) - 1, kernel.MONITORED] = 1.0
+        release = math.nan if policy.release is None else policy.release
+        const_at = kernel.HEADER + 8 * sos.shape[0] + edges.size
+        header = [
+            dt, policy.early * dt, policy.gap * dt, monitor.settle, release,
+            detector.min_duration, detector.hold, observer.torque == "joint", friction, family,
+            extra, sos.shape[0], edges.size, const_at, const_at + const.size,
+        ]  # fmt: skip
+        parts = [np.array(header, dtype=np.float64), sos, zi_unit, edges, const, table]
+        self._model = np.concatenate([np.ravel(part) for part in parts])
+        self._model.setflags(write=False)
+        flags, rows = 3 * kernel.N_FLAGS, 2 * (kernel.SECTIONS + 2 * sos.shape[0]) * n
+        self._buffers = np.zeros(flags + rows + 23 * n)
+        self._flags = self._buffers[:flags].reshape(3, kernel.N_FLAGS)
+        self._state = self._buffers[flags : flags + rows].reshape(2, -1, n)
+        self._masks = [_joints(mask) for mask in range(1 << n)] if n <= 10 else None
+        if kernel.SIGNATURE.args not in _fused_step.signatures:
+            # One compiled version, loaded from numba's cache after the first run: without
+            # more, read-only inputs (rows of a Log) would compile a second one.
+            _fused_step.compile(kernel.SIGNATURE)
+            _fused_step.disable_compile()
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the stream and the latch."""
+        self._flags[0] = 0.0
+        self._flags[0, [kernel.FLOOR, kernel.PENDING]] = -np.inf
+        self._flags[0, kernel.INSIDE_SINCE] = np.nan
+
+    def run(
+        self,
+        time: float,
+        q: FloatArray,
+        tau_m: FloatArray,
+        tau_j: FloatArray,
+        out: FloatArray,
+        method: str,
+    ) -> tuple[str, tuple[int, ...], Event | None]:
+        """:func:`~sensorless.monitor._compiled.fused_step` on this stream's arrays.
+
+        Returns the status ("ok", "collision", "settling") or, for a fault, what
+        was refused (an entry of ``REASONS`` in :mod:`._compiled`); the joints
+        outside their bounds; the event that closed at the sample (found by
+        ``method``), if any.
+        """
+        code = _fused_step(time, q, tau_m, tau_j, self._model, self._buffers, out)
+        status = code & 15
+        if status >= _FAULT:
+            return _REASONS[status - _FAULT], (), None
+        event = self._event(self._flags[2], method) if code & _EVENT else None
+        mask = code >> _JOINTS_SHIFT
+        return _STATUSES[status], _joints(mask) if self._masks is None else self._masks[mask], event
+
+    @property
+    def floor(self) -> float:
+        """No sample may come at or before this time [s]."""
+        return float(self._flags[0, kernel.FLOOR])
+
+    @property
+    def last(self) -> float:
+        """Time of the last accepted sample [s]."""
+        return float(self._flags[0, kernel.T_LAST])
+
+    @property
+    def latched(self) -> bool:
+        """Whether a collision is latched."""
+        return bool(self._flags[0, kernel.LATCHED])
+
+    @property
+    def velocity(self) -> FloatArray:
+        """The velocity estimate of the last sample run, accepted or not [rad/s]."""
+        return self._state[1, kernel.VELOCITY].copy()
+
+    def refuse(self, time: float) -> None:
+        """Record a sample refused before :meth:`run` (the gap rule's pending time)."""
+        self._flags[0, kernel.PENDING] = time
+
+    def finish(self, method: str) -> Event | None:
+        """Close the open event at the end of the stream, as ``Detector.finish``."""
+        flags = self._flags[0]
+        if not (flags[kernel.HAS_STREAM] and flags[kernel.HAS_DETECTOR]):
+            return None
+        lasted = (
+            flags[kernel.OPEN_END] - flags[kernel.OPEN_START] >= self._model[kernel.MIN_DURATION]
+        )
+        event = self._event(flags, method) if flags[kernel.OPEN] and lasted else None
+        flags[kernel.OPEN] = flags[kernel.OUTSIDE] = 0.0
+        return event
+
+    def _event(self, flags: FloatArray, method: str) -> Event:
+        start, end, joints, peak, peak_residual = flags[kernel.OPEN_START : kernel.N_FLAGS].tolist()
+        return Event(start, end, _joints(int(joints)), peak, peak_residual, method)
+
+
+def _joints(mask: int) -> tuple[int, ...]:
+    return tuple(j + 1 for j in range(mask.bit_length()) if mask >> j & 1)
+
+
+def _friction(model: FrictionModel | None, n: int) -> tuple[int, FloatArray]:
+    """Kind and parameters (n, 5) of the nominal friction, read by ``friction_torque``."""
+    parameters = np.zeros((n, 5))
+    if model is None:
+        return kernel.NO_FRICTION, parameters
+    kind, names = _FRICTIONS[type(model)]
+    for column, name in enumerate(names):
+        parameters[:, column] = np.broadcast_to(getattr(model, name), (n,))
+    return kind, parameters
+
+
+def _threshold(
+    threshold: Threshold, dt: float, n: int
+) -> tuple[int, FloatArray, FloatArray, FloatArray, float]:
+    """Family, per-joint constants, bin table (3, n_bins, n), bin edges, extrapolation margin."""
+    const = np.zeros((n, kernel.N_CONST))
+    if isinstance(threshold, ConstantThreshold):
+        const[:, kernel.WIDTH] = threshold.beta_
+        return kernel.CONSTANT, const, np.zeros((3, 1, n)), np.zeros(0), 0.0
+    if isinstance(threshold, TimeVariantThreshold):
+        hysteretic = threshold.form == "hysteretic"
+        const[:, kernel.WIDTH], const[:, kernel.GAMMA] = threshold.alpha_, threshold.gamma_
+        const[:, kernel.COEFFICIENT] = threshold.c_ if hysteretic else threshold.eps_fr_
+        family = kernel.HYSTERETIC_FORM if hysteretic else kernel.TIME_VARIANT
+        return family, const, np.zeros((3, 1, n)), np.zeros(0), 0.0
+    assert isinstance(threshold, VelocityThreshold)  # unsupported() admits these three
+    edges = np.asarray(threshold.bin_edges_, dtype=np.float64)
+    step = np.broadcast_to(threshold.gain_, (n,)) * dt  # the filter of first_order
+    const[:, kernel.GAMMA] = threshold.gamma_
+    const[:, kernel.BIN_POLE], const[:, kernel.BIN_WEIGHT] = np.exp(-step), -np.expm1(-step)
+    visited = threshold.counts_ > 0
+    first = np.argmax(visited, axis=0)
+    last = visited.shape[0] - 1 - np.argmax(visited[::-1], axis=0)
+    const[:, kernel.VISITED_LOW], const[:, kernel.VISITED_HIGH] = edges[first], edges[last + 1]
+    table = np.stack([threshold.tau_fme_, threshold.lower_, threshold.upper_])
+    return kernel.VELOCITY_BINS, const, table, edges, float(threshold.extrapolation_margin)

@@ -5,14 +5,27 @@ a :class:`CollisionMonitor` applies it to a recorded log
 (:meth:`~CollisionMonitor.run`, :meth:`~CollisionMonitor.process`) or to a
 live stream one sample at a time (:meth:`~CollisionMonitor.step`), with the
 same result (:mod:`.stream`, :mod:`.batch`), under the fault, restart,
-settling and latching rules of :mod:`.policy`. Observer settings travel with
-the fitted threshold in one YAML file (:func:`save_tuned`, :func:`load_tuned`).
+settling and latching rules of :mod:`.policy`. :func:`tune` also
+cross-validates the threshold on its collision-free logs and can set the
+margin for a stated false-alarm rate (:func:`cross_validate`,
+:func:`margin_for_rate`, :mod:`.calibration`); observer settings and that
+:class:`Calibration` travel with the fitted threshold in one YAML file
+(:func:`save_tuned`, :func:`load_tuned`).
 Units SI and radians; time along axis 0.
 """
 
 from __future__ import annotations
 
 from .batch import FaultSpan, MonitorRun
+from .calibration import (
+    Calibration,
+    RateMargin,
+    calibration_of,
+    cross_validate,
+    hours_needed,
+    margin_for_rate,
+    poisson_interval,
+)
 from .policy import Limits, StreamPolicy
 from .stream import CollisionMonitor
 from .tuning import (
@@ -26,14 +39,21 @@ from .tuning import (
 
 __all__ = [
     "METHOD_NAMES",
+    "Calibration",
     "CollisionMonitor",
     "FaultSpan",
     "Limits",
     "MonitorRun",
     "ObserverSettings",
+    "RateMargin",
     "StreamPolicy",
+    "calibration_of",
+    "cross_validate",
+    "hours_needed",
     "load_tuned",
     "make_threshold",
+    "margin_for_rate",
+    "poisson_interval",
     "save_tuned",
     "tune",
 ]

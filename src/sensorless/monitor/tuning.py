@@ -1,9 +1,12 @@
 """Tuning: observer settings, threshold families by name, fit on collision-free logs, files.
 
-:func:`tune` fits a threshold family on collision-free logs; observer settings
-travel with the fitted threshold in one YAML file (:func:`save_tuned`,
-:func:`load_tuned`), so a threshold is never applied to residuals computed
-differently from those it was fitted on. Units SI and radians; time along axis 0.
+:func:`tune` fits a threshold family on collision-free logs, cross-validates
+it on the same logs to say what false-alarm rate to expect, and can set the
+margin for a stated rate (:mod:`.calibration`); observer settings and that
+calibration travel with the fitted threshold in one YAML file
+(:func:`save_tuned`, :func:`load_tuned`), so a threshold is never applied to
+residuals computed differently from those it was fitted on. Units SI and
+radians; time along axis 0; rates per hour.
 """
 
 from __future__ import annotations
@@ -29,6 +32,16 @@ from ..thresholds import (
     Threshold,
     TimeVariantThreshold,
     VelocityThreshold,
+)
+from .calibration import (
+    DEFAULT_HOLD,
+    DEFAULT_MIN_DURATION,
+    Calibration,
+    attach_calibration,
+    calibration_of,
+    cross_validate,
+    margin_for_rate,
+    with_stated,
 )
 
 __all__ = [
@@ -153,9 +166,16 @@ def tune(
     robot: RobotModel,
     method: str,
     settings: ObserverSettings | None = None,
+    *,
+    false_alarm_rate: float | None = None,
+    folds: str | int | None = "runs",
+    min_duration: float = DEFAULT_MIN_DURATION,
+    hold: float = DEFAULT_HOLD,
+    confidence: float = 0.95,
+    seed: int = 0,
     **options: Any,
 ) -> tuple[Threshold, ObserverSettings]:
-    """Fit a threshold family on collision-free logs.
+    """Fit a threshold family on collision-free logs and say what false-alarm rate to expect.
 
     Parameters
     ----------
@@ -167,6 +187,22 @@ def tune(
         One of :data:`METHOD_NAMES`.
     settings : ObserverSettings, optional
         Observer settings; by default the observer the method watches, K_I = 20.
+    false_alarm_rate : float, optional
+        Stated false alarms per hour for the robot [1/h]: the margin is set
+        by :func:`~sensorless.monitor.margin_for_rate` on held-out folds, then
+        the family is refitted on all logs with it. Not together with ``margin``.
+    folds : "runs", int or None
+        Cross-validation folds: every log held out once ("runs"; one log:
+        two time blocks), or k folds (k time blocks of a single log). None
+        skips the cross-validation (quick fits in tests and benchmarks): the
+        threshold then carries no calibration and makes no promise.
+    min_duration, hold : float
+        Detector settings [s] the false alarms are counted with; the
+        defaults are those of :class:`~sensorless.monitor.CollisionMonitor`.
+    confidence : float
+        Level of the intervals.
+    seed : int
+        Seed of the bootstrap behind the stated rate's interval.
     **options
         Hyper-parameters of the threshold (``margin``, ``joints``, ``transient``...).
         ``transient`` [s], the start of each log left out of the fit, defaults to
@@ -177,7 +213,10 @@ def tune(
     Returns
     -------
     threshold : Threshold
-        Fitted.
+        Fitted on all logs, with the cross-validated false alarms per hour
+        (a :class:`~sensorless.monitor.Calibration`: rate, interval, warnings,
+        the stated rate's margin) as ``threshold.calibration_``
+        (:func:`~sensorless.monitor.calibration_of`) unless ``folds`` is None.
     settings : ObserverSettings
         The settings used (save them with the threshold: :func:`save_tuned`).
     """
@@ -187,6 +226,11 @@ def tune(
         )
     if not logs:
         raise InputValueError("tune needs at least one collision-free log")
+    if false_alarm_rate is not None and ("margin" in options or folds is None):
+        raise InputValueError(
+            "false_alarm_rate sets the margin from held-out folds: give no margin, and folds "
+            f"'runs' or an integer; got margin={options.get('margin')!r}, folds={folds!r}"
+        )
     settings = settings or ObserverSettings(kind=METHOD_NAMES[method])
     needed = METHOD_NAMES[method]
     if (needed == "acceleration") != (settings.kind == "acceleration"):
@@ -195,13 +239,36 @@ def tune(
         )
     signals = [settings.observe(log, robot) for log in logs]
     options.setdefault("transient", settings.settle_time(signals[0].dt))
-    return make_threshold(method, robot, **options).fit(signals), settings
+    detector: dict[str, Any] = {"folds": folds, "min_duration": min_duration, "hold": hold}
+    stated = None
+    if false_alarm_rate is not None:
+        shape = make_threshold(method, robot, **options)
+        stated = margin_for_rate(
+            signals, shape, false_alarm_rate, confidence=confidence, seed=seed, **detector
+        )
+        options["margin"] = list(stated.margin)
+    threshold = make_threshold(method, robot, **options).fit(signals)
+    if folds is None:
+        return threshold, settings
+    calibration = cross_validate(
+        signals, threshold, confidence=confidence, target_rate=false_alarm_rate, **detector
+    )
+    if stated is not None:
+        calibration = with_stated(calibration, stated)
+    return attach_calibration(threshold, calibration), settings
 
 
 def save_tuned(path: str | Path, threshold: Threshold, settings: ObserverSettings) -> Path:
-    """Write a fitted threshold and its observer settings to one readable YAML file."""
+    """Write a fitted threshold, its observer settings and its calibration to one YAML file.
+
+    The calibration (cross-validated false alarms per hour, see :func:`tune`)
+    is written under ``calibration`` when the threshold has one.
+    """
     data = threshold.to_dict()
     data["observer"] = settings.to_dict()
+    calibration = calibration_of(threshold)
+    if calibration is not None:
+        data["calibration"] = calibration.to_dict()
     out = Path(path)
     out.write_text(
         "# sensorless fitted collision threshold (edit with care)\n"
@@ -212,7 +279,10 @@ def save_tuned(path: str | Path, threshold: Threshold, settings: ObserverSetting
 
 
 def load_tuned(path: str | Path) -> tuple[Threshold, ObserverSettings]:
-    """Read a file written by :func:`save_tuned` (or a bare threshold file: default settings)."""
+    """Read a file written by :func:`save_tuned` (or a bare threshold file: default settings).
+
+    A saved calibration comes back as the threshold's ``calibration_``.
+    """
     try:
         data = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
     except (UnicodeDecodeError, yaml.YAMLError) as exc:
@@ -223,8 +293,11 @@ def load_tuned(path: str | Path) -> tuple[Threshold, ObserverSettings]:
     if not isinstance(data, dict):
         raise FileFormatError(f"{path} is not a threshold file (expected a YAML mapping)")
     settings_data = data.pop("observer", None)
+    calibration_data = data.pop("calibration", None)
     try:
         threshold = Threshold.from_dict(data)
+        if calibration_data is not None:
+            attach_calibration(threshold, Calibration.from_dict(calibration_data))
     except (InputValueError, InputTypeError) as exc:
         raise FileFormatError(f"{path}: {exc}") from None
     if settings_data is None:

@@ -81,7 +81,7 @@ def main() -> None:
     print(f"{'':<14}{'python':^29}   {'numba':^29}")
     print(f"{'family':<14}{columns}   {columns}")
     for method in FAMILIES:
-        threshold, settings = tune(free, nominal, method, margin=0.05)
+        threshold, settings = tune(free, nominal, method, margin=0.05, folds=None)
         row = f"{method:<14}"
         for backend in ("python", "numba"):
             if backend == "numba" and (method not in COMPILED or not numba_available()):
@@ -93,7 +93,7 @@ def main() -> None:
             row += f"{median / floor:>9.2f}"
         print(row)
 
-    threshold, settings = tune(free, nominal, "time-variant", margin=0.05)
+    threshold, settings = tune(free, nominal, "time-variant", margin=0.05, folds=None)
     monitor = CollisionMonitor(nominal, threshold, settings)
     batch = []
     for _ in range(REPEATS):

@@ -38,7 +38,7 @@ def monitor_and_log():
     free = [scenario.run(seed=1, collisions=False).log]
     log = scenario.run(seed=2).log
     nominal = scenario.robots()[1]
-    threshold, settings = tune(free, nominal, "time-variant", margin=0.05)
+    threshold, settings = tune(free, nominal, "time-variant", margin=0.05, folds=None)
     return CollisionMonitor(nominal, threshold, settings), log
 
 

@@ -33,7 +33,7 @@ def runs():
 @pytest.fixture(scope="module")
 def tuned(runs):
     free, _, nominal = runs
-    return {method: tune(free, nominal, method, margin=0.05) for method in FAMILIES}
+    return {method: tune(free, nominal, method, margin=0.05, folds=None) for method in FAMILIES}
 
 
 def _stream(monitor: CollisionMonitor, log: sl.Log, n: int | None = None):
@@ -79,9 +79,9 @@ def test_streaming_equals_batch_and_files_round_trip(runs, tuned, method, tmp_pa
 
 def test_tune_leaves_out_the_start_and_says_so(runs) -> None:
     free, _, nominal = runs
-    threshold, settings = tune(free, nominal, "constant")
+    threshold, settings = tune(free, nominal, "constant", folds=None)
     assert threshold.transient == pytest.approx(settings.settle_time(free[0].dt)) == 0.25
-    explicit, _ = tune(free, nominal, "constant", transient=0.0)
+    explicit, _ = tune(free, nominal, "constant", transient=0.0, folds=None)
     assert explicit.transient == 0.0
 
 

@@ -45,7 +45,7 @@ def scenarios():
         free = [scenario.run(seed=s, collisions=False).log for s in (1, 2)]
         test = scenario.run(seed=3).log
         nominal = scenario.robots()[1]
-        tuned = {m: tune(free, nominal, m, margin=0.05, **OPTIONS[m]) for m in COMPILED}
+        tuned = {m: tune(free, nominal, m, margin=0.05, folds=None, **OPTIONS[m]) for m in COMPILED}
         out[name] = (test, nominal, tuned)
     return out
 
@@ -57,7 +57,9 @@ def joint_torques():
     free = [scenario.run(seed=1, collisions=False).log]
     test = scenario.run(seed=2).log
     robot = scenario.nominal("joint")
-    tuned = tune(free, robot, "time-variant", ObserverSettings(kind="joint"), margin=0.05)
+    tuned = tune(
+        free, robot, "time-variant", ObserverSettings(kind="joint"), margin=0.05, folds=None
+    )
     return test, robot, tuned
 
 
@@ -282,7 +284,7 @@ def test_backend_option(scenarios, monkeypatch) -> None:
     test, nominal, tuned = scenarios["panda-gaz"]
     threshold, settings = tuned["constant"]
     assert CollisionMonitor(nominal, threshold, settings).backend == "numba"
-    model, model_settings = tune([test.slice(stop=2.0)], nominal, "model", margin=0.05)
+    model, model_settings = tune([test.slice(stop=2.0)], nominal, "model", margin=0.05, folds=None)
     assert CollisionMonitor(nominal, model, model_settings).backend == "python"
     with pytest.raises(InputValueError, match="backend 'numba' cannot run this monitor: the "):
         CollisionMonitor(nominal, model, model_settings, backend="numba")

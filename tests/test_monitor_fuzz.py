@@ -43,7 +43,7 @@ def setup():
     free = [scenario.run(seed=s, collisions=False).log for s in (1, 2)]
     test = scenario.run(seed=3).log
     nominal = scenario.robots()[1]
-    monitors = {m: tune(free, nominal, m, margin=0.05) for m in FAMILIES}
+    monitors = {m: tune(free, nominal, m, margin=0.05, folds=None) for m in FAMILIES}
     return test, nominal, monitors
 
 

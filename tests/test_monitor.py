@@ -257,6 +257,30 @@ def test_a_log_with_a_bad_stretch_is_processed_around_it(runs, tuned) -> None:
     assert _key(stream_events) == _key(result.events)
 
 
+def test_a_log_with_nan_in_the_middle_is_processed_around_it(runs, tuned, tmp_path) -> None:
+    _, test, nominal = runs
+    threshold, settings = tuned["time-variant"]
+    # 10/K_I: the observer restarts from rest on a moving arm; 5/K_I (the default) leaves
+    # a 13 ms excursion on joint 5 at 3.251 s here (the residual's start-up, e^-5 of it).
+    monitor = CollisionMonitor(nominal, threshold, settings, policy=StreamPolicy(settle=0.5))
+    frame = test.to_pandas()
+    lost = (frame["t"] >= 2.0) & (frame["t"] < 3.0)  # one second of NaN, as a logger writes it
+    frame.loc[lost, [c for c in frame.columns if c.startswith(("q_", "tau_m_"))]] = np.nan
+    with pytest.raises(sl.exceptions.LogFormatError, match="must be finite"):
+        sl.Log.from_pandas(frame, metadata=test.metadata)
+    sl.io.write_log(sl.Log.from_pandas(frame, allow_missing=True), tmp_path / "lost.parquet")
+    broken = sl.read_log(tmp_path / "lost.parquet", allow_missing=True)
+    result = monitor.process(broken)
+    assert [(f.start, f.end, f.n_samples) for f in result.faults] == [(2.0, 2.999, 1000)]
+    assert "non-finite" in result.faults[0].reason
+    clean = monitor.process(test).events
+    resume = 3.0 + monitor.settle
+    before = [(e.start, e.joints) for e in clean if e.start < 2.0]
+    assert [(e.start, e.joints) for e in result.events if e.start < 2.0] == before
+    after = [e for e in clean if e.start >= resume]
+    assert _key([e for e in result.events if e.start >= resume]) == _key(after)
+
+
 def test_pipeline_errors_are_clear(runs, tuned) -> None:
     free, _, nominal = runs
     with pytest.raises(UnknownNameError, match="unknown threshold method 'magic'"):

@@ -163,7 +163,7 @@ def tune_command(
 
 
 def _detect(log_path: Path, thresholds: Path, robot: str | None) -> tuple[Log, str, MonitorRun]:
-    log = read_log(log_path)
+    log = read_log(log_path, allow_missing=True)  # lost samples: reported as fault spans
     threshold, settings = load_tuned(thresholds)
     monitor = CollisionMonitor(nominal_robot(robot, log, settings.kind), threshold, settings)
     return log, threshold.name, monitor.process(log)

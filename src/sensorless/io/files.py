@@ -157,10 +157,11 @@ def read_log(
         Number of joints of the robot the log is for; checked against the log.
     format : {'parquet', 'csv'}, optional
         File format; by default from the suffix, else from the sidecar.
-    check_regular, rtol : keyword-only
+    check_regular, rtol, allow_missing : keyword-only
         As in :func:`~sensorless.io.validate_table`; pass
         ``check_regular=False`` to read a jittery log and then
-        :func:`~sensorless.io.resample` it.
+        :func:`~sensorless.io.resample` it, ``allow_missing=True`` to read a
+        log with lost samples for the monitor.
 
     Returns
     -------

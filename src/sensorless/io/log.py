@@ -119,6 +119,11 @@ class Log:
         nominal_robot, sample_rate [Hz], units, library version, collisions,
         ...). Stored as a JSON round-tripped copy (numpy scalars become
         Python numbers, tuples become lists).
+    allow_missing : bool, keyword-only
+        Accept NaN or inf in the joint groups as samples the recorder lost
+        (the time column must still be finite). Such a log can be *monitored*
+        (:meth:`sensorless.monitor.CollisionMonitor.process` reports the spans
+        as faults and restarts after them); observers and tuning refuse it.
 
     Raises
     ------
@@ -142,6 +147,7 @@ class Log:
     tau_c: FloatArray | None = None
     collision_id: IntArray | None = None
     metadata: dict[str, Any] = field(default_factory=dict)
+    allow_missing: bool = field(default=False, kw_only=True)
 
     def __post_init__(self) -> None:
         t = np.asarray(self.t)
@@ -179,7 +185,7 @@ class Log:
                 columns[column_name(group, joint + 1)] = arr[:, joint]
         if collision_id is not None:
             columns["collision_id"] = collision_id
-        validate_table(columns, check_regular=False)
+        validate_table(columns, check_regular=False, allow_missing=self.allow_missing)
 
         object.__setattr__(self, "t", _frozen(t, np.float64))
         for group, arr in groups.items():
@@ -261,7 +267,7 @@ class Log:
             Description of the run (JSON-serialisable).
         n_dof : int, optional
             Number of joints of the robot; checked against the table.
-        check_regular, rtol : keyword-only
+        check_regular, rtol, allow_missing : keyword-only
             As in :func:`~sensorless.io.validate_table`.
 
         Raises
@@ -284,6 +290,7 @@ class Log:
         return cls(
             t=as_float_column("t", df["t"].to_numpy()),
             metadata=dict(metadata) if metadata is not None else {},
+            allow_missing=checks.get("allow_missing", False),
             **arrays,
         )
 

@@ -37,6 +37,7 @@ class TableChecks(TypedDict, total=False):
 
     check_regular: bool
     rtol: float
+    allow_missing: bool
 
 
 def _check_n_dof(n_dof: Any) -> int | None:
@@ -210,6 +211,7 @@ def validate_table(
     n_dof: int | None = None,
     check_regular: bool = True,
     rtol: float = 1e-6,
+    allow_missing: bool = False,
 ) -> int:
     """Check that a table is a valid log and return its number of joints.
 
@@ -227,6 +229,9 @@ def validate_table(
         (relative) of the median step.
     rtol : float
         Relative tolerance of the regularity check.
+    allow_missing : bool
+        Accept NaN or inf in the joint groups as lost samples (``t`` and
+        ``collision_id`` must still be finite).
 
     Returns
     -------
@@ -286,6 +291,8 @@ def validate_table(
             f"a log needs at least 2 samples to define its time base; got {n_samples}"
         )
     for name, column in values.items():
+        if allow_missing and name not in ("t", "collision_id"):
+            continue
         bad = np.flatnonzero(~np.isfinite(column))
         if bad.size:
             row = int(bad[0])

@@ -1,211 +1,29 @@
-"""Collision detection: a residual outside its threshold bounds, grouped into events.
+"""The detector: a residual outside its threshold bounds, grouped into events.
 
-A sample is *outside* when the residual of any monitored joint is below its
-lower or above its upper bound (eq. 3.37/3.39, 4.34, 5.31). Consecutive
-outside samples form an event; ``start`` and ``end`` are the times of its
-first and last outside sample. Two events whose gap (start of the second
-minus end of the first) is shorter than ``hold`` [s] are merged, and events
-lasting less than ``min_duration`` [s] (``end - start``) are dropped, after
-merging. An event's ``joints`` are those outside at any of its samples and
-its ``peak`` is the largest excursion beyond a bound (the first one if
-several are equal).
-
-:meth:`Detector.run` / :meth:`Detector.detect` work on a recorded run;
-:meth:`Detector.initial_state`, :meth:`Detector.step` and
-:meth:`Detector.finish` on a live stream, and give the same events.
-
-Faulty samples in a stream
---------------------------
-:meth:`Detector.step` never raises on bad data. A sample with a NaN or an
-infinity in any input, or whose time does not increase past the last
-accepted sample, gives a verdict with status ``"fault"`` and returns the
-state unchanged: the sample is skipped as if it had not arrived, so the
-filters of the threshold do not advance and every later verdict equals the
-one of the same stream without that sample. The threshold's filters treat
-the next accepted sample as one period ``dt`` later. ``run(...,
-skip_nonfinite=True)`` applies the same rule to a recorded run; by default
-it raises instead.
-
-Examples
---------
->>> import numpy as np
->>> from sensorless.signals import ObserverSignals
->>> from sensorless.thresholds import ConstantThreshold
->>> t = np.arange(100) * 1e-3
->>> r = 0.1 * np.sin(40 * t)[:, None]
->>> z = np.zeros_like(r)
->>> fit_run = ObserverSignals(t, r, z, z, z, z, gain=20.0, robot="demo")
->>> detector = Detector(ConstantThreshold(margin=0.05).fit(fit_run))
->>> hit = r.copy()
->>> hit[40:50] += 1.0
->>> events = detector.detect(ObserverSignals(t, hit, z, z, z, z, gain=20.0, robot="demo"))
->>> [(round(e.start, 3), round(e.end, 3), e.joints) for e in events]
-[(0.04, 0.049, (1,))]
+See :mod:`sensorless.detection` for the rules. Units SI and radians; arrays
+have time along axis 0 and shape ``(n_samples, n_dof)``.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
-import pandas as pd
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-from ._validation import FloatArray, check_dt, check_duration
-from .exceptions import InputTypeError, InputValueError
-from .signals import Event, ObserverSignals
-from .thresholds.base import Threshold
-from .thresholds.checks import as_inputs, as_samples, check_joints
-from .thresholds.state import ThresholdInputs, ThresholdState
+from .._validation import FloatArray, check_dt, check_duration
+from ..exceptions import InputTypeError, InputValueError
+from ..signals import Event, ObserverSignals
+from ..thresholds.base import Threshold
+from ..thresholds.checks import as_inputs, as_samples, check_joints
+from ..thresholds.state import ThresholdInputs
+from ._results import BoolArray, DetectionResult, DetectorState, Verdict, _merged
 
-__all__ = [
-    "DetectionResult",
-    "Detector",
-    "DetectorState",
-    "Verdict",
-    "events_to_pandas",
-]
+__all__ = ["Detector"]
 
-BoolArray = NDArray[np.bool_]
-Status = Literal["ok", "collision", "fault", "settling"]
-
-_EVENT_COLUMNS = ["start", "end", "duration", "joints", "peak", "peak_residual", "method"]
 _STREAM_INPUTS = ("residual", "model_torque", "friction", "sign", "velocity")
-
-
-def _merged(earlier: Event, later: Event) -> Event:
-    """One event from ``earlier`` to ``later``: joints of both, the larger peak (first if equal)."""
-    peak = earlier if later.peak <= earlier.peak else later
-    joints = tuple(sorted(set(earlier.joints) | set(later.joints)))
-    return dataclasses.replace(peak, start=earlier.start, end=later.end, joints=joints)
-
-
-@dataclass(frozen=True, eq=False)
-class Verdict:
-    """What :meth:`Detector.step` says about one sample.
-
-    Attributes
-    ----------
-    status : {"ok", "collision", "fault", "settling"}
-        ``"collision"``: the sample is outside its bounds and the event it
-        belongs to has lasted at least ``min_duration``; ``"fault"``: the
-        sample was skipped (non-finite input or time not increasing);
-        ``"settling"``: a monitor's observer has just (re)started and the
-        sample is not judged (never given by :meth:`Detector.step`).
-    t : float
-        Time of the sample [s].
-    joints : tuple of int
-        Monitored joints (1-based) outside their bounds at this sample; may
-        be non-empty with status ``"ok"`` while an event is shorter than
-        ``min_duration``.
-    residual, lower, upper : ndarray of shape (n_dof,)
-        Residual and bounds at this sample [N m] (bounds NaN on a fault).
-    event : Event or None
-        The event that ended at this sample (after ``hold`` and
-        ``min_duration``), else None.
-    message : str
-        Why the sample is a fault; empty otherwise.
-    """
-
-    status: Status
-    t: float
-    joints: tuple[int, ...]
-    residual: FloatArray
-    lower: FloatArray
-    upper: FloatArray
-    event: Event | None = None
-    message: str = ""
-
-
-@dataclass(frozen=True, eq=False)
-class DetectorState:
-    """What a :class:`Detector` carries from one sample of a stream to the next.
-
-    :meth:`Detector.initial_state` gives the first one, :meth:`Detector.step`
-    and :meth:`Detector.finish` the next.
-
-    Attributes
-    ----------
-    dt : float
-        Sample period of the stream [s], with which the threshold's state starts.
-    threshold : ThresholdState or None
-        State of the threshold; None until the first accepted sample.
-    t : float
-        Time of the last accepted sample [s] (``-inf`` before any).
-    outside : bool
-        Whether the last accepted sample was outside its bounds.
-    open_event : Event or None
-        The event in progress (possibly in its ``hold`` gap), without ``method`` yet.
-    """
-
-    dt: float
-    threshold: ThresholdState | None = None
-    t: float = -math.inf
-    outside: bool = False
-    open_event: Event | None = None
-
-
-@dataclass(frozen=True, eq=False)
-class DetectionResult:
-    """Detection over a recorded run.
-
-    Attributes
-    ----------
-    t : ndarray of shape (n_samples,)
-        Time [s].
-    residual, lower, upper : ndarray of shape (n_samples, n_dof)
-        Residual and bounds [N m]; bounds are NaN at skipped samples.
-    outside : ndarray of bool, shape (n_samples, n_dof)
-        Monitored joint outside its bounds.
-    valid : ndarray of bool, shape (n_samples,)
-        Sample used (False: skipped, see the module docstring).
-    events : list of Event
-        Detected events.
-    method : str
-        Name of the threshold family.
-    joints : tuple of int
-        Monitored joints (1-based).
-    dt : float
-        Sample period the threshold's filters used [s]: the median step of
-        the accepted samples. Stream with this ``dt`` to reproduce the run.
-    """
-
-    t: FloatArray
-    residual: FloatArray
-    lower: FloatArray
-    upper: FloatArray
-    outside: BoolArray
-    valid: BoolArray
-    events: list[Event]
-    method: str
-    joints: tuple[int, ...]
-    dt: float
-
-    def to_pandas(self) -> pd.DataFrame:
-        """Per-sample table: ``t``, ``valid`` and ``residual_j``, ``lower_j``, ``upper_j``,
-        ``outside_j`` for joints j = 1..n_dof."""
-        columns: dict[str, Any] = {"t": self.t, "valid": self.valid}
-        for name in ("residual", "lower", "upper", "outside"):
-            values = getattr(self, name)
-            for j in range(values.shape[1]):
-                columns[f"{name}_{j + 1}"] = values[:, j]
-        return pd.DataFrame(columns)
-
-    def events_to_pandas(self) -> pd.DataFrame:
-        """The events as a table, see :func:`events_to_pandas`."""
-        return events_to_pandas(self.events)
-
-
-def events_to_pandas(events: list[Event]) -> pd.DataFrame:
-    """Table of events: start, end, duration [s], joints (tuple, 1-based), peak,
-    peak_residual [N m], method; one row per event."""
-    rows = [
-        [e.start, e.end, e.duration, e.joints, e.peak, e.peak_residual, e.method] for e in events
-    ]
-    return pd.DataFrame(rows, columns=_EVENT_COLUMNS)
 
 
 def _excursion(residual: FloatArray, lower: FloatArray, upper: FloatArray) -> FloatArray:

@@ -1,0 +1,58 @@
+"""Collision detection: a residual outside its threshold bounds, grouped into events.
+
+A sample is *outside* when the residual of any monitored joint is below its
+lower or above its upper bound (eq. 3.37/3.39, 4.34, 5.31). Consecutive
+outside samples form an event; ``start`` and ``end`` are the times of its
+first and last outside sample. Two events whose gap (start of the second
+minus end of the first) is shorter than ``hold`` [s] are merged, and events
+lasting less than ``min_duration`` [s] (``end - start``) are dropped, after
+merging. An event's ``joints`` are those outside at any of its samples and
+its ``peak`` is the largest excursion beyond a bound (the first one if
+several are equal).
+
+:meth:`Detector.run` / :meth:`Detector.detect` work on a recorded run;
+:meth:`Detector.initial_state`, :meth:`Detector.step` and
+:meth:`Detector.finish` on a live stream, and give the same events.
+
+Faulty samples in a stream
+--------------------------
+:meth:`Detector.step` never raises on bad data. A sample with a NaN or an
+infinity in any input, or whose time does not increase past the last
+accepted sample, gives a verdict with status ``"fault"`` and returns the
+state unchanged: the sample is skipped as if it had not arrived, so the
+filters of the threshold do not advance and every later verdict equals the
+one of the same stream without that sample. The threshold's filters treat
+the next accepted sample as one period ``dt`` later. ``run(...,
+skip_nonfinite=True)`` applies the same rule to a recorded run; by default
+it raises instead.
+
+Examples
+--------
+>>> import numpy as np
+>>> from sensorless.signals import ObserverSignals
+>>> from sensorless.thresholds import ConstantThreshold
+>>> t = np.arange(100) * 1e-3
+>>> r = 0.1 * np.sin(40 * t)[:, None]
+>>> z = np.zeros_like(r)
+>>> fit_run = ObserverSignals(t, r, z, z, z, z, gain=20.0, robot="demo")
+>>> detector = Detector(ConstantThreshold(margin=0.05).fit(fit_run))
+>>> hit = r.copy()
+>>> hit[40:50] += 1.0
+>>> events = detector.detect(ObserverSignals(t, hit, z, z, z, z, gain=20.0, robot="demo"))
+>>> [(round(e.start, 3), round(e.end, 3), e.joints) for e in events]
+[(0.04, 0.049, (1,))]
+"""
+
+from __future__ import annotations
+
+from ._results import DetectionResult, DetectorState, Status, Verdict, events_to_pandas
+from .detector import Detector
+
+__all__ = [
+    "DetectionResult",
+    "Detector",
+    "DetectorState",
+    "Status",
+    "Verdict",
+    "events_to_pandas",
+]

@@ -28,7 +28,7 @@ from ..observers import AccelerationObserver, MomentumObserver, ObserverSample, 
 from ..robots.model import RobotModel
 from ..signals import Event, ObserverSignals
 from ..thresholds import ModelBasedThreshold, Threshold, ThresholdInputs
-from .batch import FaultSpan, MonitorRun, run_log
+from .batch import MonitorRun, run_log
 from .policy import StreamPolicy
 from .tuning import ObserverSettings
 
@@ -471,16 +471,10 @@ class CollisionMonitor:
         event, stream.detector = self.detector.finish(stream.detector)
         return event
 
-    # Batch access for :mod:`sensorless.monitor.batch` (one place builds the observer).
     @property
     def estimator(self) -> Any:
         """The velocity/acceleration estimator of the stream."""
         return self._estimator
-
-    @property
-    def fault_spans(self) -> type[FaultSpan]:
-        """The type of the fault spans :meth:`process` reports."""
-        return FaultSpan
 
 
 _EMPTY = np.empty(0)

@@ -8,11 +8,15 @@ per sample from Python, what any per-sample use of Pinocchio costs at least):
 - the wall time of :meth:`ModelBasedThreshold.fit` on both runs (median of
   ``--repeat``) and its cost per sample;
 - the median and p99 of one :meth:`ModelBasedThreshold.step` over
-  ``--steps`` samples of a run.
+  ``--steps`` samples of a run;
+- the cost per sample of the bound terms in their numpy form
+  (:func:`sensorless.metric.error_bound_terms` with ``backend="numpy"``, what
+  an install without numba runs), over ``--numpy-samples`` samples.
 
 Compile time (numba, when installed) is excluded: a short fit runs first.
 
     .venv/bin/python benchmarks/bench_model_based.py [--seconds 60] [--repeat 1] [--steps 5000]
+        [--numpy-samples 20000]
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ import time
 import numpy as np
 import pinocchio as pin
 
+from sensorless.metric import error_bound_terms
 from sensorless.observers import observe
 from sensorless.signals import ObserverSignals
 from sensorless.simulation.scenario import load_scenario
@@ -69,11 +74,26 @@ def step_times(threshold: ModelBasedThreshold, run: ObserverSignals, n_steps: in
     return times * 1e6
 
 
+def numpy_cost(threshold: ModelBasedThreshold, run: ObserverSignals, n_samples: int) -> float:
+    """Cost [µs] per sample of the numpy form of the bound terms over ``n_samples`` of ``run``."""
+    assert run.position is not None and run.acceleration is not None
+    rows = slice(0, min(n_samples, run.n_samples))
+    states = run.position[rows], run.velocity[rows], run.acceleration[rows]
+    weights = threshold.independent_, threshold.theta_
+    start = time.perf_counter()
+    error_bound_terms(
+        threshold.robot_model(), *weights, *states, threshold.bq_, threshold.btheta_,
+        backend="numpy",
+    )  # fmt: skip
+    return (time.perf_counter() - start) / states[0].shape[0] * 1e6
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=60.0)
     parser.add_argument("--repeat", type=int, default=1)
     parser.add_argument("--steps", type=int, default=5000)
+    parser.add_argument("--numpy-samples", type=int, default=20000)
     args = parser.parse_args()
 
     scenario = load_scenario("panda-gaz").with_duration(args.seconds)
@@ -95,12 +115,14 @@ def main() -> None:
         fits.append(time.perf_counter() - start)
     fit = statistics.median(fits)
     micro = step_times(threshold, run, min(args.steps, run.n_samples))
+    numpy_us = numpy_cost(threshold, run, args.numpy_samples)
 
     print(f"panda-gaz, 2 collision-free runs of {args.seconds:g} s ({n_samples} samples)")
     print(f"Pinocchio floor (one regressor call per sample): {floor:.1f} us")
     print(f"model-based fit: {fit:.2f} s ({fit / n_samples * 1e6:.1f} us per sample)")
     median, p99 = np.median(micro), np.percentile(micro, 99)
     print(f"model-based step: median {median:.1f} us, p99 {p99:.1f} us")
+    print(f"bound terms, numpy form (no numba): {numpy_us:.1f} us per sample")
 
 
 if __name__ == "__main__":

@@ -12,10 +12,11 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+import pinocchio as pin
 import pytest
 
 import sensorless as sl
-from sensorless.exceptions import DimensionError, InputValueError
+from sensorless.exceptions import DimensionError, InputValueError, ModelError, UnknownNameError
 from sensorless.filters import Butterworth, FiniteDifference, SavitzkyGolay
 from sensorless.metric import (
     BoundTerms,
@@ -28,9 +29,12 @@ from sensorless.metric import (
     q_vector,
     rank_trajectories,
 )
+from sensorless.metric import bounds as bounds_module
+from sensorless.robots.recursion import numba_available
 from sensorless.trajectories import QuinticViaPoints
 
 DT = 0.01
+BACKENDS = ["numpy", "numba"] if numba_available() else ["numpy"]
 
 
 @pytest.fixture(scope="module")
@@ -359,6 +363,148 @@ def test_q_error_bounds_errors() -> None:
         q_error_bounds(q[:2], DT, est, noise_std=0.0)
     with pytest.raises(InputValueError, match="positive"):
         q_error_bounds(q, -1.0, est, noise_std=0.0)
+
+
+# --------------------------------------------------------------------- terms, fast and reference
+
+
+def _reference_bound_terms(
+    robot: sl.RobotModel,
+    columns: np.ndarray,
+    theta: np.ndarray,
+    q: np.ndarray,
+    qd: np.ndarray,
+    qdd: np.ndarray,
+    bq: np.ndarray,
+    btheta: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The terms as computed before issue 14: products of the split regressor of l unit states."""
+    n_samples, n_dof = q.shape
+    terms = robot.regressor_terms(q)[..., columns]  # (c, l, n, p)
+    q_error = np.abs(terms @ theta).transpose(0, 2, 1) @ bq
+    cross = (np.abs(terms) @ btheta).transpose(0, 2, 1) @ bq
+    flat = terms.reshape(n_samples, terms.shape[1], -1)
+    regressor = (q_vector(qd, qdd)[:, None, :] @ flat).reshape(n_samples, n_dof, -1)
+    return q_error, cross, np.abs(regressor) @ btheta
+
+
+def tree_robot() -> sl.RobotModel:
+    """A branching arm: revolute joints about x, y and a skew axis, two prismatic joints."""
+    rng = np.random.default_rng(11)
+    model = pin.Model()
+    model.name = "tree"
+    joints = [
+        (0, pin.JointModelRX()),
+        (1, pin.JointModelPY()),
+        (1, pin.JointModelRevoluteUnaligned(*(np.array([1.0, 2.0, 2.0]) / 3.0))),
+        (3, pin.JointModelPrismaticUnaligned(*(np.array([2.0, -1.0, 2.0]) / 3.0))),
+        (3, pin.JointModelRY()),
+    ]
+    for index, (parent, joint) in enumerate(joints, start=1):
+        rotation = pin.rpy.rpyToMatrix(*rng.uniform(-1.0, 1.0, 3))
+        placement = pin.SE3(rotation, rng.uniform(-0.3, 0.3, 3))
+        jid = model.addJoint(parent, joint, placement, f"joint{index}")
+        spread = rng.standard_normal((3, 3))
+        inertia = pin.Inertia(
+            rng.uniform(0.5, 2.0), rng.uniform(-0.2, 0.2, 3), spread @ spread.T + 0.1 * np.eye(3)
+        )
+        model.appendBodyToJoint(jid, inertia, pin.SE3.Identity())
+    model.armature = rng.uniform(0.01, 0.1, len(joints))
+    return sl.RobotModel.from_pinocchio(model)
+
+
+def random_states(n_dof: int, n_samples: int = 40) -> tuple[np.ndarray, ...]:
+    rng = np.random.default_rng(5)
+    q, qd, qdd = rng.uniform(-3.0, 3.0, (3, n_samples, n_dof))
+    bq = rng.uniform(0.0, 1.0, q_length(n_dof))
+    bq[-1] = 0.0
+    return q, qd, qdd, bq
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize("name", ["puma560", "panda"])
+def test_bound_terms_equal_the_split_regressor(name: str, backend: str) -> None:
+    """Kinematic terms = products of RobotModel.regressor_terms (l Pinocchio calls per sample)."""
+    robot = sl.robots.load(name)
+    base = sl.base_parameters(robot)
+    q, qd, qdd, bq = random_states(robot.n_dof)
+    btheta = parameter_bounds(0.02, base.values)
+    args = (robot, base.independent, base.values, q, qd, qdd, bq, btheta)
+    terms = error_bound_terms(*args, backend=backend, chunk_size=16)
+    for actual, expected in zip(terms, _reference_bound_terms(*args), strict=True):
+        assert np.all(expected > 0)
+        np.testing.assert_allclose(actual, expected, rtol=1e-10, atol=0)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_bound_terms_of_a_tree_with_prismatic_joints(backend: str) -> None:
+    """Every standard column, revolute and prismatic joints on any axis, two branches."""
+    robot = tree_robot()
+    columns = np.arange(robot.n_dof * 11)
+    btheta = np.random.default_rng(2).uniform(0.0, 0.1, columns.size)
+    q, qd, qdd, bq = random_states(robot.n_dof)
+    args = (robot, columns, robot.parameter_vector(), q, qd, qdd, bq, btheta)
+    terms = error_bound_terms(*args, backend=backend, chunk_size=16)
+    for actual, expected in zip(terms, _reference_bound_terms(*args), strict=True):
+        np.testing.assert_allclose(actual, expected, rtol=1e-10, atol=0)
+
+
+def test_bound_terms_backends_and_chunks_agree(
+    puma: sl.RobotModel, puma_base: sl.BaseParameters
+) -> None:
+    q, qd, qdd, bq = random_states(6, n_samples=50)
+    columns, theta = puma_base.independent, puma_base.values
+    btheta = parameter_bounds(0.02, theta)
+    whole = error_bound_terms(puma, columns, theta, q, qd, qdd, bq, btheta, backend="numpy")
+    for backend, chunk in [("numpy", 7), ("auto", 7), (BACKENDS[-1], 1)]:
+        terms = error_bound_terms(
+            puma, columns, theta, q, qd, qdd, bq, btheta, backend=backend, chunk_size=chunk
+        )
+        np.testing.assert_allclose(np.array(terms), np.array(whole), rtol=1e-13, atol=0)
+    for backend in BACKENDS:
+        empty = error_bound_terms(
+            puma, columns, theta, q[:0], qd[:0], qdd[:0], bq, btheta, backend=backend
+        )
+        assert all(term.shape == (0, 6) for term in empty)
+
+
+def test_bound_terms_errors(
+    puma: sl.RobotModel, puma_base: sl.BaseParameters, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    q, qd, qdd, bq = random_states(6, n_samples=3)
+    btheta = parameter_bounds(0.02, puma_base.values)
+    args = (puma, puma_base.independent, puma_base.values, q, qd, qdd, bq, btheta)
+    with pytest.raises(UnknownNameError, match=r"unknown backend 'gpu'; options: \['auto'"):
+        error_bound_terms(*args, backend="gpu")
+    with pytest.raises(InputValueError, match="chunk_size must be an integer >= 1"):
+        error_bound_terms(*args, chunk_size=0)
+    expected = error_bound_terms(*args, backend="numpy")
+    monkeypatch.setattr(bounds_module, "_numba_kernel", None)
+    with pytest.raises(InputValueError, match="backend 'numba' needs numba"):
+        error_bound_terms(*args, backend="numba")
+    np.testing.assert_array_equal(np.array(error_bound_terms(*args)), np.array(expected))
+
+
+@pytest.mark.parametrize(
+    ("joint", "gravity", "message"),
+    [
+        (pin.JointModelHZ(0.1), np.zeros(3), "is a JointModelHZ; the bound terms handle one-DoF"),
+        (pin.JointModelTranslation(), np.zeros(3), "is a JointModelTranslation"),
+        (pin.JointModelRZ(), np.ones(3), "must be a pure linear field"),
+    ],
+)
+def test_bound_terms_need_revolute_or_prismatic_joints(
+    joint: pin.JointModel, gravity: np.ndarray, message: str
+) -> None:
+    model = pin.Model()
+    jid = model.addJoint(0, joint, pin.SE3.Identity(), "joint")
+    model.appendBodyToJoint(jid, pin.Inertia(1.0, np.zeros(3), np.eye(3)), pin.SE3.Identity())
+    model.gravity = pin.Motion(np.array([0.0, 0.0, -9.81]), gravity)
+    robot = sl.RobotModel.from_pinocchio(model)
+    n = robot.n_dof
+    zero = np.zeros((1, n))
+    with pytest.raises(ModelError, match=message):
+        error_bound_terms(robot, [0], [1.0], zero, zero, zero, np.zeros(q_length(n)), np.ones(1))
 
 
 # ------------------------------------------------------------------------- validation

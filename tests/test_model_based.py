@@ -18,7 +18,7 @@ import sensorless as sl
 from sensorless.exceptions import DimensionError, InputValueError, ModelError, NotFittedError
 from sensorless.filters import Butterworth
 from sensorless.io import Log
-from sensorless.metric import parameter_bounds
+from sensorless.metric import parameter_bounds, q_vector
 from sensorless.signals import ObserverSignals
 from sensorless.simulation.scenario import Scenario, load_scenario
 from sensorless.thresholds.base import load_threshold
@@ -186,6 +186,35 @@ def test_disturbance_and_parameter_bounds_widen_the_threshold(
     assert np.all(model_big >= model)
     np.testing.assert_array_equal(bigger.b_d_, [1, 2, 3, 4, 5, 6])
     np.testing.assert_array_equal(short_fit.bq_, bigger.bq_)
+
+
+def test_bounds_equal_the_split_regressor_formula(
+    data: tuple[sl.RobotModel, ObserverSignals, ObserverSignals], short_fit: ModelBasedThreshold
+) -> None:
+    """B_c of eq. 3.36 written out with RobotModel.regressor_terms, in batch and stream."""
+    nominal, free, _ = data
+    part = segment(free, 1500, 1530)
+    assert part.position is not None and part.acceleration is not None
+    split = nominal.regressor_terms(part.position)[..., short_fit.independent_]  # (t, l, n, p)
+    full = np.einsum("tl,tlnp->tnp", q_vector(part.velocity, part.acceleration), split)
+    expected = (
+        np.einsum("tln,l->tn", np.abs(split @ short_fit.theta_), short_fit.bq_)
+        + np.einsum("tlnp,p,l->tn", np.abs(split), short_fit.btheta_, short_fit.bq_)
+        + np.abs(full) @ short_fit.btheta_
+        + short_fit.b_fr_
+        + short_fit.b_d_
+    )
+    np.testing.assert_allclose(short_fit.bounds(part)[1], expected, rtol=1e-10, atol=0)
+    state = short_fit.initial_state(
+        part.model_torque[0], part.friction[0], part.sign[0], part.velocity[0],
+        position=part.position[0], acceleration=part.acceleration[0],
+    )  # fmt: skip
+    for k in range(3):
+        _, upper, state = short_fit.step(
+            state, part.model_torque[k], part.friction[k], part.sign[k], part.velocity[k],
+            position=part.position[k], acceleration=part.acceleration[k],
+        )  # fmt: skip
+        np.testing.assert_allclose(upper, expected[k], rtol=1e-10, atol=0)
 
 
 # ------------------------------------------------------------------------- streaming

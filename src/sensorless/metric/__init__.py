@@ -16,6 +16,11 @@ the integrand without w_t being OF(t) (eq. 3.24). Smaller is better: the
 same task planned along a trajectory with a smaller EM gives a more precise
 τ̂_c and a lower model-based threshold (§ 3.5, :mod:`sensorless.thresholds.model_based`).
 
+:func:`error_bound_terms` evaluates these terms per sample from the
+kinematics of the arm (the entries of Y_k^q and Y come from the link
+Jacobians, without the l regressor calls of :meth:`RobotModel.regressor_terms`),
+compiled with numba when it is installed (``pip install sensorless[fast]``).
+
 Θ are the *base* parameters (:func:`sensorless.base_parameters`): the
 columns ``independent`` of the standard regressor, with the values of the
 nominal robot. Y_kjp^q is the (j, p) entry of Y_k^q restricted to those

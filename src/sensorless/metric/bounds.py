@@ -10,17 +10,26 @@ threshold. Notation: :mod:`sensorless.metric`.
 
 from __future__ import annotations
 
+from types import ModuleType
 from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validation import FloatArray, as_joint_array, check_dt, check_finite, check_int
-from ..exceptions import DimensionError, InputTypeError, InputValueError
+from ..exceptions import DimensionError, InputTypeError, InputValueError, UnknownNameError
 from ..filters import CausalEstimator
 from ..robots.model import RobotModel
 from ..robots.regressors import q_length, q_vector
 from ._checks import nonnegative, per_joint_nonnegative
+from ._kernel_numpy import bound_terms_block
+from ._plan import BoundWeights, plan_for
+
+_numba_kernel: ModuleType | None
+try:
+    from . import _kernel_numba as _numba_kernel
+except ImportError:  # numba is an optional extra
+    _numba_kernel = None
 
 __all__ = [
     "DEFAULT_CHUNK_SIZE",
@@ -33,9 +42,11 @@ __all__ = [
     "q_vector",
 ]
 
-#: Samples per batch of :meth:`RobotModel.regressor_terms`, whose result holds
-#: l·n·11n floats per sample (about 30 kB for six joints): 2 000 samples ≈ 60 MB.
-DEFAULT_CHUNK_SIZE = 2000
+_BACKENDS = ("auto", "numba", "numpy")
+
+#: Samples per block of the numpy form of :func:`error_bound_terms`, which holds
+#: about 240 kB per sample at seven joints: 256 samples ≈ 60 MB.
+DEFAULT_CHUNK_SIZE = 256
 
 
 def q_error_bounds(
@@ -215,17 +226,22 @@ def error_bound_terms(
     btheta: FloatArray,
     *,
     chunk_size: int = DEFAULT_CHUNK_SIZE,
+    backend: str = "auto",
 ) -> BoundTerms:
-    """Per-sample, per-joint terms of eq. 3.28 and 3.36, in batches of samples.
+    """Per-sample, per-joint terms of eq. 3.28 and 3.36.
 
-    Y(q, q̇, q̈) is rebuilt as Σ_k Y_k^q(q) Q_k from the split regressor, which
-    costs nothing more than the split itself. Inputs are not checked here
-    (the public functions of :mod:`sensorless.metric` and the thresholds check them).
+    The entries of the split regressor Y_k^q(q) and of Y(q, q̇, q̈) come from
+    the kinematics of each sample (:mod:`sensorless.metric._kernel`), equal
+    to those of :meth:`RobotModel.regressor_terms` and
+    :meth:`RobotModel.regressor` without building either. Inputs are not
+    checked here (the public functions of :mod:`sensorless.metric` and the
+    thresholds check them).
 
     Parameters
     ----------
     robot : RobotModel
-        Robot with the kinematics of the nominal model (only its regressor is used).
+        Robot with the kinematics of the nominal model (its joints must be
+        revolute or prismatic).
     columns : array-like of int of shape (n_base,)
         Base-parameter columns of the standard regressor
         (:attr:`BaseParameters.independent`).
@@ -238,29 +254,47 @@ def error_bound_terms(
     btheta : ndarray of shape (n_base,)
         Absolute B_Θ̃ (eq. 3.27), e.g. from :func:`parameter_bounds`.
     chunk_size : int
-        Samples per call of :meth:`RobotModel.regressor_terms` (bounds memory).
+        Samples per block of the numpy form (bounds its memory, about
+        240 kB per sample at seven joints); the compiled form needs none.
+    backend : {"auto", "numba", "numpy"}
+        Compiled kernel or numpy; ``"auto"`` takes numba when it is installed
+        (``pip install sensorless[fast]``). Both give the same terms.
 
     Returns
     -------
     BoundTerms
     """
     chunk = check_int(chunk_size, "chunk_size", 1)
-    index = np.asarray(columns, dtype=np.intp)
-    values = np.asarray(theta, dtype=float)
-    n_samples, n_dof = q.shape
-    parts = [np.zeros((n_samples, n_dof)) for _ in range(3)]
-    q_all = q_vector(qd, qdd)
-    for start in range(0, n_samples, chunk):
-        stop = min(start + chunk, n_samples)
-        terms = robot.regressor_terms(q[start:stop])[..., index]  # (c, l, n, p)
-        c, n_terms = terms.shape[:2]
-        # Matrix products rather than multi-operand einsums: BLAS does the work.
-        parts[0][start:stop] = np.abs(terms @ values).transpose(0, 2, 1) @ bq
-        parts[1][start:stop] = (np.abs(terms) @ btheta).transpose(0, 2, 1) @ bq
-        flat = terms.reshape(c, n_terms, -1)
-        regressor = (q_all[start:stop, None, :] @ flat).reshape(c, n_dof, -1)
-        parts[2][start:stop] = np.abs(regressor) @ btheta
-    return BoundTerms(*parts)
+    if backend not in _BACKENDS:
+        raise UnknownNameError(f"unknown backend {backend!r}; options: {list(_BACKENDS)}")
+    if backend == "numba" and _numba_kernel is None:
+        raise InputValueError(
+            "backend 'numba' needs numba (pip install sensorless[fast]); use 'auto' or 'numpy'"
+        )
+    plan = plan_for(robot)
+    weights = BoundWeights.from_base(
+        robot.n_dof,
+        np.asarray(columns, dtype=np.intp),
+        np.asarray(theta, dtype=float),
+        np.asarray(btheta, dtype=float),
+        np.asarray(bq, dtype=float),
+    )
+    q, qd, qdd = (np.ascontiguousarray(x, dtype=float) for x in (q, qd, qdd))
+    out = np.empty((3, *q.shape))
+    if _numba_kernel is not None and backend != "numpy":
+        _numba_kernel.bound_terms_batch(
+            q, qd, qdd, plan.joint_table, plan.axes, plan.placement_rotations,
+            plan.placement_translations, plan.gravity, plan.jacobian, plan.gravity_row,
+            plan.ancestors, plan.cross_rows, plan.pair_row, plan.velocity_cross,
+            plan.product_x, plan.product_w, plan.entry_product, plan.entry_sign,
+            plan.entry_table, plan.n_vectors, plan.n_split_entries, weights.theta,
+            weights.btheta, weights.bq, out,
+        )  # fmt: skip
+    else:
+        for start in range(0, q.shape[0], chunk):
+            rows = slice(start, start + chunk)
+            bound_terms_block(plan, weights, q[rows], qd[rows], qdd[rows], out[:, rows])
+    return BoundTerms(out[0], out[1], out[2])
 
 
 # ---------------------------------------------------------------------------- helpers

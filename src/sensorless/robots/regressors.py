@@ -137,21 +137,20 @@ def regressor_term_labels(n_dof: int) -> list[str]:
 
 
 def _sample_terms(model: pin.Model, data: pin.Data, q: FloatArray) -> FloatArray:
-    """Split regressor of one sample, shape (l, n_dof, 11·n_dof)."""
+    """Split regressor of one sample, shape (l, n_dof, 11·n_dof), filled in place."""
     n = model.nv
+    out = np.empty((q_length(n), n, n * N_LINK_PARAMETERS))
+    zero, eye = np.zeros(n), np.eye(n)
+    # Unit states that isolate each term: g at rest, then q̈ = e_i, q̇ = e_i, q̇ = e_i + e_j.
+    y_g = out[-1]
+    y_g[:] = standard_regressor(model, data, q, zero, zero)
+    for i in range(n):
+        out[i] = standard_regressor(model, data, q, zero, eye[i]) - y_g
+    y_c = out[-1 - n : -1]
+    for i in range(n):
+        y_c[i] = standard_regressor(model, data, q, eye[i], zero) - y_g
     upper_i, upper_j = np.triu_indices(n, 1)
-    eye = np.eye(n)
-    # Unit states that isolate each term: g, then q̈ = e_i, q̇ = e_i, q̇ = e_i + e_j.
-    velocities = np.vstack([np.zeros((1 + n, n)), eye, eye[upper_i] + eye[upper_j]])
-    accelerations = np.vstack([np.zeros((1, n)), eye, np.zeros((n + upper_i.size, n))])
-    samples = np.array(
-        [
-            standard_regressor(model, data, q, qd, qdd)
-            for qd, qdd in zip(velocities, accelerations, strict=True)
-        ]
-    )
-    y_g = samples[0]
-    y_m = samples[1 : n + 1] - y_g
-    y_c = samples[n + 1 : 2 * n + 1] - y_g
-    y_b = samples[2 * n + 1 :] - y_g - y_c[upper_i] - y_c[upper_j]
-    return np.concatenate([y_m, y_b, y_c, y_g[None]])
+    for index, (first, second) in enumerate(zip(upper_i, upper_j, strict=True)):
+        y_b = standard_regressor(model, data, q, eye[first] + eye[second], zero)
+        out[n + index] = y_b - y_g - y_c[first] - y_c[second]
+    return out

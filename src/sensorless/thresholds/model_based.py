@@ -118,7 +118,8 @@ class ModelBasedThreshold(Threshold):
         As for every family, see :class:`~sensorless.thresholds.base.Threshold`
         (``transient`` e.g. the start-up of the velocity/acceleration filter).
     chunk_size : int
-        Samples per batch of the split regressor (bounds memory).
+        Samples per block of the bound terms in their numpy form (bounds
+        memory); the compiled form, used when numba is installed, needs none.
 
     Attributes
     ----------

@@ -28,19 +28,21 @@ it raises instead.
 
 Examples
 --------
+Two bumps 10 ms apart are one event when ``hold`` is longer than the gap:
+
 >>> import numpy as np
 >>> from sensorless.signals import ObserverSignals
 >>> from sensorless.thresholds import ConstantThreshold
->>> t = np.arange(100) * 1e-3
->>> r = 0.1 * np.sin(40 * t)[:, None]
->>> z = np.zeros_like(r)
->>> fit_run = ObserverSignals(t, r, z, z, z, z, gain=20.0, robot="demo")
->>> detector = Detector(ConstantThreshold(margin=0.05).fit(fit_run))
->>> hit = r.copy()
->>> hit[40:50] += 1.0
->>> events = detector.detect(ObserverSignals(t, hit, z, z, z, z, gain=20.0, robot="demo"))
->>> [(round(e.start, 3), round(e.end, 3), e.joints) for e in events]
-[(0.04, 0.049, (1,))]
+>>> def run(r):  # a residual r [N m] at 1 kHz, the other signals zero
+...     z = np.zeros_like(r)
+...     return ObserverSignals(np.arange(len(r)) * 1e-3, r, z, z, z, z, gain=20.0)
+>>> quiet = 0.1 * np.sin(np.arange(100) * 0.04)[:, None]
+>>> detector = Detector(ConstantThreshold(margin=0.05).fit(run(quiet)), hold=0.02)
+>>> hit = quiet.copy()
+>>> hit[40:45] += 1.0
+>>> hit[55:60] += 1.0
+>>> [(round(e.start, 3), round(e.end, 3), e.joints) for e in detector.detect(run(hit))]
+[(0.04, 0.059, (1,))]
 """
 
 from __future__ import annotations

@@ -171,9 +171,19 @@ def _restart(q: FloatArray, const: FloatArray, model: FloatArray, s: FloatArray,
 
 @njit(cache=True)
 def _observe(
-    q: FloatArray, tau: FloatArray, const: FloatArray, model: FloatArray, s: Any, work: Any
+    q: FloatArray,
+    tau: FloatArray,
+    const: FloatArray,
+    model: FloatArray,
+    s: Any,
+    work: Any,
+    fresh: bool,
 ) -> bool:
-    """Estimator, recursion and observer update in place on the rows ``s``; False if not finite."""
+    """Estimator, recursion and observer update in place on the rows ``s``; False if not finite.
+
+    ``fresh``: the second sample of a stream, whose velocity estimate is the
+    first one; the observer starts from it (``MomentumObserver.initial_state``).
+    """
     n = q.shape[0]
     dt = model[DT]
     for j in range(n):
@@ -196,6 +206,11 @@ def _observe(
         p1, vg1 = s[TERMS, j], s[TERMS + 1, j] - s[TERMS + 2, j]
         fr1 = friction_torque(kind, const, j, v)
         s1 = _sign(v)
+        if fresh:
+            s[MOMENTUM, j], s[COR_GRAVITY, j], s[FRICTION_TORQUE, j] = p1, vg1, fr1
+            s[SIGN, j], s[TORQUE, j] = s1, fr1 - vg1
+            s[RESIDUAL, j], s[MODEL_TORQUE, j] = 0.0, -vg1
+            s[FILTERED_FRICTION, j], s[FILTERED_SIGN, j] = fr1, s1
         h = (p1 - s[MOMENTUM, j]) / dt - 0.5 * (s[COR_GRAVITY, j] + vg1)
         f = (s[FRICTION_TORQUE, j] + fr1) * 0.5
         g = (s[SIGN, j] + s1) * 0.5
@@ -358,7 +373,8 @@ def fused_step(
         new[HAS_STREAM], new[START], new[HAS_DETECTOR] = 1.0, time, 0.0
     else:
         rows[:] = state[0]
-    if not _observe(q, tau_j if joint else tau_m, const, model, rows, work):
+    fresh = not restart and old[T_LAST] == old[START]
+    if not _observe(q, tau_j if joint else tau_m, const, model, rows, work, fresh):
         old[PENDING] = time
         for j in range(n):
             if not abs(rows[VELOCITY, j]) <= const[j, SPEED_LIMIT]:

@@ -10,6 +10,7 @@ time along axis 0, arrays of shape ``(n_samples, n_dof)``.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -163,12 +164,7 @@ def _segment(
     if monitor.settings.kind == "acceleration":
         signals, _ = observer._run_checked(t[block], q[block], tau[block], initial)
     else:
-        # A measured velocity gives the observer its true start (no start-up excursion).
-        first = np.zeros((1, q.shape[1])) if measured is None else measured[start : start + 1]
-        state = observer._initial_state_checked(q[start : start + 1], first)
-        signals, _ = observer._run_checked(
-            t[block], q[block], np.ascontiguousarray(velocity), tau[block], state
-        )
+        signals = _momentum_signals(observer, t, q, measured, tau, span, velocity)
     finite = np.isfinite(
         np.stack([signals.residual, signals.model_torque, signals.friction, signals.sign])
     ).all(axis=(0, 2))
@@ -201,6 +197,44 @@ def _segment(
         part = _slice(signals, settled, acceleration)
         events.extend(monitor.detector.detect(part))
     return end, reason
+
+
+def _momentum_signals(
+    observer: Any,
+    t: FloatArray,
+    q: FloatArray,
+    measured: FloatArray | None,
+    tau: FloatArray,
+    span: tuple[int, int],
+    velocity: FloatArray,
+) -> ObserverSignals:
+    """The momentum observer over [start, stop), started as the stream starts it.
+
+    The first sample starts it at (q, q̇) with q̇ measured or at rest; the
+    second, whose velocity estimate is the first one, starts it again there,
+    so a segment that begins in motion has no start-up excursion.
+    """
+    start, stop = span
+    velocity = np.ascontiguousarray(velocity)
+    first = np.zeros((1, q.shape[1])) if measured is None else measured[start : start + 1]
+    starts = [(start, first)] + ([(start + 1, velocity[1:2])] if stop > start + 1 else [])
+    parts = []
+    for k, (a, v0) in enumerate(starts):
+        b = starts[k + 1][0] if k + 1 < len(starts) else stop
+        state = observer._initial_state_checked(q[a : a + 1], v0)
+        v = velocity[a - start : b - start]
+        part, _ = observer._run_checked(t[a:b], q[a:b], v, tau[a:b], state)
+        parts.append(part)
+    if len(parts) == 1:
+        return parts[0]
+    return dataclasses.replace(
+        parts[0],
+        t=np.concatenate([p.t for p in parts]),
+        **{
+            name: np.concatenate([getattr(p, name) for p in parts])
+            for name in ("residual", "model_torque", "friction", "sign", "velocity", "position")
+        },
+    )
 
 
 def _uses_acceleration(monitor: CollisionMonitor) -> bool:

@@ -396,6 +396,10 @@ class CollisionMonitor:
             sample = ObserverSample(*(row[0] for row in out))
             outputs = np.stack(sample)
         else:
+            if not restart and stream.t == stream.start:
+                # The first velocity estimate comes with the second sample: the observer
+                # starts there, so a stream that begins in motion has no start-up excursion.
+                observer = self._observer._initial_state_checked(q[None], velocity[None])
             sample, observer = self._observer._step_checked(observer, q, velocity, tau)
             outputs = observer.filtered
         if not np.isfinite(outputs).all() or (

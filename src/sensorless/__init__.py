@@ -6,11 +6,6 @@ with time along axis 0.
 
 from __future__ import annotations
 
-# isort: off
-# First: modules that still read ``sensorless.__version__`` need it while the package loads.
-from ._version import __version__
-
-# isort: on
 from . import (
     detection,
     evaluation,
@@ -24,6 +19,7 @@ from . import (
     thresholds,
     trajectories,
 )
+from ._version import __version__
 from .exceptions import SensorlessError
 from .io import Log, read_log, write_log
 from .monitor import CollisionMonitor, ObserverSettings, load_tuned, save_tuned, tune

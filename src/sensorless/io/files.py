@@ -12,12 +12,12 @@ from __future__ import annotations
 
 import json
 import re
-from importlib import metadata as importlib_metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import pandas as pd
 
+from .._version import __version__
 from ..exceptions import InputValueError, LogFormatError
 from .columns import UNITS, abbreviate
 from .log import Log
@@ -54,13 +54,6 @@ def _check_format(format: Any) -> str:
     if format not in FORMATS:
         raise InputValueError(f"format must be one of {list(FORMATS)} or None; got {format!r}")
     return str(format)
-
-
-def _library_version() -> str:
-    try:
-        return importlib_metadata.version("sensorless")
-    except importlib_metadata.PackageNotFoundError:
-        return "unknown"
 
 
 def write_log(log: Log, path: str | Path, format: str | None = None) -> Path:
@@ -109,7 +102,7 @@ def write_log(log: Log, path: str | Path, format: str | None = None) -> Path:
     sidecar = {
         "format": fmt,
         "format_version": _FORMAT_VERSION,
-        "sensorless_version": _library_version(),
+        "sensorless_version": __version__,
         "n_dof": log.n_dof,
         "n_samples": log.n_samples,
         "columns": list(table.columns),

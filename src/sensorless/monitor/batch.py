@@ -149,8 +149,9 @@ def _segment(
     """Run samples [start, stop) = ``span`` as one stream; return where it ended and why.
 
     The stream ends early at the first sample the stream would refuse (a
-    velocity estimate beyond its limit, a non-finite observer output); that
-    index and the reason are returned, else ``(stop, "")``.
+    velocity estimate beyond its limit, a non-finite observer output): the
+    samples before it are kept, and that index and the reason are returned,
+    else ``(stop, "")``.
     """
     start, stop = span
     block = slice(start, stop)
@@ -184,9 +185,11 @@ def _segment(
         )
         if k == 0:
             return end, reason
-        return _segment(monitor, t, q, measured, tau, (start, end), out, settling, events)[
-            0
-        ], reason
+        # Everything here is causal: the samples before k are those of a stream ending there.
+        stop, block = end, slice(start, end)
+        signals = _rows(signals, slice(0, k), None)
+        velocity = velocity[:k]
+        acceleration = None if acceleration is None else acceleration[:k]
     for name in _SERIES:
         values = acceleration if name == "acceleration" else getattr(signals, name)
         if values is not None:
@@ -194,7 +197,7 @@ def _segment(
     settled = int(np.searchsorted(t[block] - t[start], monitor.settle, side="left"))
     settling[start : start + settled] = True
     if settled < stop - start:
-        part = _slice(signals, settled, acceleration)
+        part = _rows(signals, slice(settled, None), acceleration)
         events.extend(monitor.detector.detect(part))
     return end, reason
 
@@ -241,22 +244,22 @@ def _uses_acceleration(monitor: CollisionMonitor) -> bool:
     return bool(monitor._outputs[2])
 
 
-def _slice(
-    signals: ObserverSignals, first: int, acceleration: FloatArray | None
+def _rows(
+    signals: ObserverSignals, rows: slice, acceleration: FloatArray | None
 ) -> ObserverSignals:
-    """The signals from sample ``first`` on (the threshold starts after the settling)."""
+    """The samples ``rows`` of ``signals``, with ``acceleration`` as its acceleration."""
     return ObserverSignals(
-        t=signals.t[first:],
-        residual=signals.residual[first:],
-        model_torque=signals.model_torque[first:],
-        friction=signals.friction[first:],
-        sign=signals.sign[first:],
-        velocity=signals.velocity[first:],
+        t=signals.t[rows],
+        residual=signals.residual[rows],
+        model_torque=signals.model_torque[rows],
+        friction=signals.friction[rows],
+        sign=signals.sign[rows],
+        velocity=signals.velocity[rows],
         gain=signals.gain,
         kind=signals.kind,
         robot=signals.robot,
-        position=None if signals.position is None else signals.position[first:],
-        acceleration=None if acceleration is None else acceleration[first:],
+        position=None if signals.position is None else signals.position[rows],
+        acceleration=None if acceleration is None else acceleration[rows],
         metadata=signals.metadata,
     )
 

@@ -12,13 +12,13 @@ joins by defining the class attribute ``name``.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from importlib import metadata as importlib_metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import yaml
 
+from .._version import __version__
 from ..exceptions import DimensionError, InputValueError, UnknownNameError
 
 if TYPE_CHECKING:
@@ -41,13 +41,6 @@ _FILE_HEADER = (
 )
 
 
-def _library_version() -> str:
-    try:
-        return importlib_metadata.version("sensorless")
-    except importlib_metadata.PackageNotFoundError:
-        return "unknown"
-
-
 def _to_builtin(value: Any) -> Any:
     if isinstance(value, np.ndarray):
         return value.tolist()
@@ -63,7 +56,7 @@ def threshold_to_dict(threshold: Threshold) -> dict[str, Any]:
     threshold._check_fitted()
     return {
         "method": threshold.name,
-        "library_version": _library_version(),
+        "library_version": __version__,
         "robot": threshold.robot_,
         "kind": threshold.kind_,
         "n_dof": int(threshold.n_dof_),

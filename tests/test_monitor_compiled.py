@@ -295,3 +295,94 @@ def test_backend_option(scenarios, monkeypatch) -> None:
     assert CollisionMonitor(nominal, threshold, settings).backend == "python"
     with pytest.raises(InputValueError, match=r"numba is not installed \(pip install sensorless"):
         CollisionMonitor(nominal, threshold, settings, backend="numba")
+
+
+def _with_bad_stretch(log, rng):
+    """``log`` with measured velocity (the truth plus noise), 50 NaN rows and a limit breach."""
+    frame = log.to_pandas()
+    n = log.n_dof
+    measured = log.qd_true + rng.normal(0.0, 1e-3, log.qd_true.shape)
+    for j in range(n):
+        frame[f"qd_{j + 1}"] = measured[:, j]
+    k = int(np.searchsorted(log.t, 1.5))
+    frame.loc[k : k + 49, "q_3"] = np.nan
+    frame.loc[k + 700, "tau_m_2"] = 1e6  # beyond the torque limit: one refused sample
+    return type(log).from_pandas(frame, allow_missing=True)
+
+
+def _assert_same_run(got, expected) -> None:
+    """Two MonitorRuns of one log: same faults, settling, events; series within TOLERANCE."""
+    assert got.faults == expected.faults
+    np.testing.assert_array_equal(got.settling, expected.settling)
+    assert _key(got.events) == _key(expected.events)
+    for a, b in zip(got.events, expected.events, strict=True):
+        _assert_same_event(a, b)
+    for name in ("residual", "model_torque", "friction", "sign", "velocity"):
+        np.testing.assert_allclose(
+            getattr(got.signals, name),
+            getattr(expected.signals, name),
+            rtol=0.0,
+            atol=TOLERANCE,
+            err_msg=name,
+        )
+    assert got.signals.metadata["observer"] == expected.signals.metadata["observer"]
+
+
+@pytest.mark.parametrize("scenario", ["panda-gaz", "puma560-thesis"])
+@pytest.mark.parametrize("method", COMPILED)
+def test_compiled_batch_equals_python_batch(scenarios, scenario, method) -> None:
+    """The kernel over a whole log (``fused_block``) = the Python path's array computation."""
+    test, nominal, tuned = scenarios[scenario]
+    compiled, python = _pair(nominal, tuned[method])
+    for log in (test, _with_bad_stretch(test, np.random.default_rng(4))):
+        got, expected = compiled.process(log), python.process(log)
+        _assert_same_run(got, expected)
+    # (puma560-thesis then leaves the position limits of joint 4 for 0.37 s)
+    assert [f.n_samples for f in got.faults[:2]] == [50, 1]
+    assert got.faults[1].reason.startswith("tau_m of joint 2 is 1e+06 N m")
+    assert got.signals.metadata["observer"]["velocity"] == "measured"
+    # The batch leaves the live stream alone.
+    compiled.step(*next(_samples(test)))
+    compiled.process(test)
+    assert compiled.step(*list(_samples(test, 2))[1]).status == "settling"
+
+
+def test_compiled_batch_of_joint_torques_equals_python(joint_torques) -> None:
+    test, robot, tuned = joint_torques
+    compiled, python = _pair(robot, tuned)
+    _assert_same_run(compiled.process(test), python.process(test))
+
+
+@pytest.mark.parametrize("backend", ["python", "numba"])
+def test_measured_velocity_in_the_stream_equals_the_batch(scenarios, backend) -> None:
+    """``step(..., qd=)`` = ``process`` of a log with ``qd`` columns, sample by sample."""
+    test, nominal, tuned = scenarios["panda-gaz"]
+    threshold, settings = tuned["velocity"]
+    log = _with_bad_stretch(test, np.random.default_rng(5))
+    monitor = CollisionMonitor(nominal, threshold, settings, backend=backend)
+    batch = monitor.process(log)
+    residual = np.full((log.n_samples, log.n_dof), np.nan)
+    events, statuses = [], []
+    for k in range(log.n_samples):
+        verdict = monitor.step(log.t[k], log.q[k], log.tau_m[k], qd=log.qd[k])
+        statuses.append(verdict.status)
+        if verdict.status != "fault":
+            residual[k] = verdict.residual
+        events += [verdict.event] if verdict.event is not None else []
+    last = monitor.finish()
+    events += [last] if last is not None else []
+    np.testing.assert_allclose(residual, batch.signals.residual, rtol=0.0, atol=TOLERANCE)
+    assert statuses.count("fault") == sum(f.n_samples for f in batch.faults) == 51
+    assert _key(events) == _key(batch.events)
+    # The measured velocity is what the observer used: it differs from the estimate's run.
+    estimated = monitor.process(test).signals.residual
+    assert np.nanmax(np.abs(estimated - batch.signals.residual)) > 1e-3
+    # A bad measured velocity is a fault that changes nothing.
+    monitor.reset()
+    for k in range(400):
+        monitor.step(log.t[k], log.q[k], log.tau_m[k], qd=log.qd[k])
+    before = monitor.step(log.t[400], log.q[400], log.tau_m[400], qd=log.qd[400])
+    for bad in (log.qd[401][:3], np.full(7, np.inf), log.qd[401] + 100.0, "fast"):
+        verdict = monitor.step(log.t[401], log.q[401], log.tau_m[401], qd=bad)
+        assert verdict.status == "fault" and "qd" in verdict.message
+    assert before.status in ("ok", "collision")

@@ -43,7 +43,7 @@ from numba import njit, types
 from .._validation import FloatArray
 from ..robots._recursion_numba import terms_at
 
-__all__ = ["REASONS", "SIGNATURE", "STATUSES", "fused_step"]
+__all__ = ["BLOCK_SIGNATURE", "REASONS", "SIGNATURE", "STATUSES", "fused_block", "fused_step"]
 
 # model header
 DT, EARLY, GAP, SETTLE, RELEASE, MIN_DURATION, HOLD, JOINT = range(8)
@@ -74,11 +74,15 @@ REASONS = ("time", "q", "tau_m", "tau_j", "early", "gap", "qd", "observer", "bou
 """What a fault refused: a time not past the last, a limit, a time rule, a non-finite result."""
 
 _READ = types.Array(types.float64, 1, "C", readonly=True)
-SIGNATURE = types.int64(
-    types.float64, _READ, _READ, _READ, _READ,
-    types.Array(types.float64, 1, "C"), types.Array(types.float64, 2, "C"),
-)  # fmt: skip
+_READ2 = types.Array(types.float64, 2, "C", readonly=True)
+_WRITE, _WRITE2 = types.Array(types.float64, 1, "C"), types.Array(types.float64, 2, "C")
+SIGNATURE = types.int64(types.float64, _READ, _READ, _READ, _READ, _READ, _WRITE, _WRITE2)
 """Arguments of :func:`fused_step`; writable arrays convert to its read-only types."""
+BLOCK_SIGNATURE = types.void(
+    _READ, _READ2, _READ2, _READ2, _READ2, _READ, _WRITE,
+    types.Array(types.float64, 3, "C"), types.Array(types.int64, 1, "C"), _WRITE2,
+)  # fmt: skip
+"""Arguments of :func:`fused_block`."""
 
 
 @njit(cache=True)
@@ -151,20 +155,29 @@ def _terms(q: FloatArray, const: FloatArray, s: Any, work: Any) -> None:
 
 
 @njit(cache=True)
-def _restart(q: FloatArray, const: FloatArray, model: FloatArray, s: FloatArray, work: Any) -> None:
-    """Initial estimator and observer states at ``q``, at rest, into the rows ``s``."""
+def _restart(
+    q: FloatArray, qd: FloatArray, const: FloatArray, model: FloatArray, s: FloatArray, work: Any
+) -> None:
+    """Initial estimator and observer states at ``q`` into the rows ``s``.
+
+    The observer starts at the measured velocity ``qd`` when it has n_dof
+    entries, else at rest (``MomentumObserver.initial_state``); the estimator
+    always starts at rest.
+    """
     n = q.shape[0]
     zi_at = HEADER + 6 * int(model[N_SECTIONS])
     kind = int(model[FRICTION])
-    s[VELOCITY] = 0.0
+    for j in range(n):
+        s[VELOCITY, j] = qd[j] if qd.shape[0] == n else 0.0
     _terms(q, const, s, work)
     for j in range(n):
+        v = s[VELOCITY, j]
         vg = s[TERMS + 1, j] - s[TERMS + 2, j]
-        fr = friction_torque(kind, const, j, 0.0)
+        fr = friction_torque(kind, const, j, v)
         s[MOMENTUM, j], s[COR_GRAVITY, j], s[FRICTION_TORQUE, j] = s[TERMS, j], vg, fr
-        s[SIGN, j], s[TORQUE, j] = 0.0, fr - vg
+        s[SIGN, j], s[TORQUE, j] = _sign(v), fr - vg
         s[RESIDUAL, j], s[MODEL_TORQUE, j], s[FILTERED_FRICTION, j] = 0.0, -vg, fr
-        s[FILTERED_SIGN, j] = 0.0
+        s[FILTERED_SIGN, j] = _sign(v)
         for row in range(2 * int(model[N_SECTIONS])):
             s[SECTIONS + row, j] = model[zi_at + row] * q[j]
 
@@ -172,6 +185,7 @@ def _restart(q: FloatArray, const: FloatArray, model: FloatArray, s: FloatArray,
 @njit(cache=True)
 def _observe(
     q: FloatArray,
+    qd: FloatArray,
     tau: FloatArray,
     const: FloatArray,
     model: FloatArray,
@@ -183,6 +197,8 @@ def _observe(
 
     ``fresh``: the second sample of a stream, whose velocity estimate is the
     first one; the observer starts from it (``MomentumObserver.initial_state``).
+    A measured velocity ``qd`` with n_dof entries replaces the estimate (the
+    estimator still runs, so a stream may switch between the two).
     """
     n = q.shape[0]
     dt = model[DT]
@@ -195,7 +211,7 @@ def _observe(
             s[SECTIONS + 2 * k, j] = model[b + 1] * y - model[b + 4] * out + z1
             s[SECTIONS + 2 * k + 1, j] = model[b + 2] * y - model[b + 5] * out
             y = out
-        s[VELOCITY, j] = y / dt
+        s[VELOCITY, j] = qd[j] if qd.shape[0] == n else y / dt
     for j in range(n):
         if not abs(s[VELOCITY, j]) <= const[j, SPEED_LIMIT]:
             return False
@@ -311,9 +327,23 @@ def _detect(
 
 
 @njit(cache=True)
+def _views(model: FloatArray, buffers: FloatArray, n: int) -> Any:
+    """``const``, ``table``, ``flags``, ``state`` and ``work``: views of the two flat arrays."""
+    n_rows = SECTIONS + 2 * int(model[N_SECTIONS])
+    table_at = int(model[TABLE_AT])
+    const = model[int(model[CONST_AT]) : table_at].reshape((n, N_CONST))
+    table = model[table_at:].reshape((3, (model.shape[0] - table_at) // (3 * n), n))
+    flags = buffers[: 3 * N_FLAGS].reshape((3, N_FLAGS))
+    end = 3 * N_FLAGS + 2 * n_rows * n
+    state = buffers[3 * N_FLAGS : end].reshape((2, n_rows, n))
+    return const, table, flags, state, buffers[end:].reshape((n, 23))
+
+
+@njit(cache=True)
 def fused_step(
     time: float,
     q: FloatArray,
+    qd: FloatArray,
     tau_m: FloatArray,
     tau_j: FloatArray,
     model: FloatArray,
@@ -323,19 +353,21 @@ def fused_step(
     """One sample of the stream; returns status | ``EVENT`` | joints mask << ``JOINTS_SHIFT``.
 
     ``time`` [s] is finite; ``q`` [rad], ``tau_m`` and ``tau_j`` [N m] have
-    shape (n_dof,) (``tau_j`` is ``tau_m`` for the motor-torque observer).
-    ``out`` (3, n_dof) receives the residual and the bounds [N m] (NaN bounds
-    while settling).
+    shape (n_dof,) (``tau_j`` is ``tau_m`` for the motor-torque observer);
+    ``qd`` [rad/s] is the measured velocity, shape (n_dof,), or empty to use
+    the estimate. ``out`` (3, n_dof) receives the residual and the bounds
+    [N m] (NaN bounds while settling).
     """
+    const, table, flags, state, work = _views(model, buffers, q.shape[0])
+    return _step(time, (q, qd, tau_m, tau_j), model, (const, table, flags, state, work), out)
+
+
+@njit(cache=True)
+def _step(time: float, sample: Any, model: FloatArray, views: Any, out: FloatArray) -> int:
+    """:func:`fused_step` on the ``views`` of its two flat arrays."""
+    q, qd, tau_m, tau_j = sample
+    const, table, flags, state, work = views
     n = q.shape[0]
-    n_rows = SECTIONS + 2 * int(model[N_SECTIONS])
-    table_at = int(model[TABLE_AT])
-    const = model[int(model[CONST_AT]) : table_at].reshape((n, N_CONST))
-    table = model[table_at:].reshape((3, (model.shape[0] - table_at) // (3 * n), n))
-    flags = buffers[: 3 * N_FLAGS].reshape((3, N_FLAGS))
-    end = 3 * N_FLAGS + 2 * n_rows * n
-    state = buffers[3 * N_FLAGS : end].reshape((2, n_rows, n))
-    work = buffers[end:].reshape((n, 23))
     old = flags[0]
     if time <= old[FLOOR]:
         return FAULT_TIME
@@ -369,12 +401,12 @@ def fused_step(
     if restart:
         if old[HAS_STREAM] != 0.0 and old[HAS_DETECTOR] != 0.0:
             _close(old, model[MIN_DURATION], event)
-        _restart(q, const, model, rows, work)
+        _restart(q, qd, const, model, rows, work)
         new[HAS_STREAM], new[START], new[HAS_DETECTOR] = 1.0, time, 0.0
     else:
         rows[:] = state[0]
     fresh = not restart and old[T_LAST] == old[START]
-    if not _observe(q, tau_j if joint else tau_m, const, model, rows, work, fresh):
+    if not _observe(q, qd, tau_j if joint else tau_m, const, model, rows, work, fresh):
         old[PENDING] = time
         for j in range(n):
             if not abs(rows[VELOCITY, j]) <= const[j, SPEED_LIMIT]:
@@ -396,3 +428,45 @@ def fused_step(
     old[:] = new
     state[0] = rows
     return code | (EVENT if event[OPEN] != 0.0 else 0)
+
+
+@njit(cache=True)
+def fused_block(
+    t: FloatArray,
+    q: FloatArray,
+    qd: FloatArray,
+    tau_m: FloatArray,
+    tau_j: FloatArray,
+    model: FloatArray,
+    buffers: FloatArray,
+    series: FloatArray,
+    codes: Any,
+    events: FloatArray,
+) -> None:
+    """:func:`fused_step` over the rows of a block: the batch monitor is the stream.
+
+    ``t`` (n_samples,) [s]; ``q``, ``tau_m``, ``tau_j`` (n_samples, n_dof);
+    ``qd`` (n_samples, n_dof) measured [rad/s] or (n_samples, 0). Per sample,
+    ``codes`` receives the return code, ``series`` (7, n_samples, n_dof) the
+    residual, lower and upper bounds, and the observer's filtered model
+    torque, friction, sign and velocity (NaN left at faults but the velocity
+    of a ``FAULT_VELOCITY``), and ``events``
+    (n_samples, 5) the event closed there (start, end, joints mask, peak,
+    peak residual) when the code has ``EVENT``.
+    """
+    n = q.shape[1]
+    views = _views(model, buffers, n)
+    flags, state = views[2], views[3]
+    out = np.empty((3, n))
+    for k in range(t.shape[0]):
+        code = _step(t[k], (q[k], qd[k], tau_m[k], tau_j[k]), model, views, out)
+        codes[k] = code
+        if code == FAULT_VELOCITY:  # the estimate its message names
+            series[6, k] = state[1, VELOCITY]
+        if code & 15 >= FAULT:
+            continue
+        series[0:3, k] = out
+        series[3, k], series[4, k] = state[0, MODEL_TORQUE], state[0, FILTERED_FRICTION]
+        series[5, k], series[6, k] = state[0, FILTERED_SIGN], state[0, VELOCITY]
+        if code & EVENT:
+            events[k] = flags[2, OPEN_START:N_FLAGS]

@@ -38,7 +38,8 @@ _FRICTIONS: dict[type, tuple[int, tuple[str, ...]]] = {
 }
 _FAMILIES = (ConstantThreshold, TimeVariantThreshold, VelocityThreshold)
 # Bound once: each attribute lookup on the module costs as much as a line of arithmetic.
-_fused_step, _FAULT, _EVENT = kernel.fused_step, kernel.FAULT, kernel.EVENT
+_fused_step, _fused_block = kernel.fused_step, kernel.fused_block
+_FAULT, _EVENT = kernel.FAULT, kernel.EVENT
 _JOINTS_SHIFT, _REASONS, _STATUSES = kernel.JOINTS_SHIFT, kernel.REASONS, kernel.STATUSES
 
 
@@ -62,6 +63,8 @@ def unsupported(monitor: CollisionMonitor) -> str:
 class FusedStream:
     """The two arrays of one monitor's compiled stream, and what reads them.
 
+    ``FAULT`` and ``SETTLING`` are status codes (``code & 15``) of the kernel.
+
     Parameters
     ----------
     monitor : CollisionMonitor
@@ -69,6 +72,8 @@ class FusedStream:
         observer, fitted threshold, detector, limits, policy and settling
         window are read once.
     """
+
+    FAULT, SETTLING = kernel.FAULT, kernel.SETTLING
 
     def __init__(self, monitor: CollisionMonitor) -> None:
         observer, policy, detector = monitor._observer, monitor.policy, monitor.detector
@@ -95,46 +100,80 @@ class FusedStream:
         self._model = np.concatenate([np.ravel(part) for part in parts])
         self._model.setflags(write=False)
         flags, rows = 3 * kernel.N_FLAGS, 2 * (kernel.SECTIONS + 2 * sos.shape[0]) * n
-        self._buffers = np.zeros(flags + rows + 23 * n)
+        self._buffers = _fresh(np.zeros(flags + rows + 23 * n))
         self._flags = self._buffers[:flags].reshape(3, kernel.N_FLAGS)
         self._state = self._buffers[flags : flags + rows].reshape(2, -1, n)
         self._masks = [_joints(mask) for mask in range(1 << n)] if n <= 10 else None
-        if kernel.SIGNATURE.args not in _fused_step.signatures:
-            # One compiled version, loaded from numba's cache after the first run: without
-            # more, read-only inputs (rows of a Log) would compile a second one.
-            _fused_step.compile(kernel.SIGNATURE)
-            _fused_step.disable_compile()
-        self.reset()
+        for function, signature in (
+            (_fused_step, kernel.SIGNATURE),
+            (_fused_block, kernel.BLOCK_SIGNATURE),
+        ):
+            if signature.args not in function.signatures:
+                # One compiled version each, loaded from numba's cache after the first run:
+                # without more, read-only inputs (rows of a Log) would compile a second one.
+                function.compile(signature)
+                function.disable_compile()
 
     def reset(self) -> None:
         """Forget the stream and the latch."""
-        self._flags[0] = 0.0
-        self._flags[0, [kernel.FLOOR, kernel.PENDING]] = -np.inf
-        self._flags[0, kernel.INSIDE_SINCE] = np.nan
+        _fresh(self._buffers)
 
     def run(
         self,
         time: float,
-        q: FloatArray,
-        tau_m: FloatArray,
-        tau_j: FloatArray,
+        sample: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
         out: FloatArray,
         method: str,
     ) -> tuple[str, tuple[int, ...], Event | None]:
         """:func:`~sensorless.monitor._compiled.fused_step` on this stream's arrays.
 
-        Returns the status ("ok", "collision", "settling") or, for a fault, what
-        was refused (an entry of ``REASONS`` in :mod:`._compiled`); the joints
-        outside their bounds; the event that closed at the sample (found by
-        ``method``), if any.
+        ``sample`` is (q, qd, tau_m, tau_j), ``qd`` empty without a measured
+        velocity. Returns the status ("ok", "collision", "settling") or, for a
+        fault, what was refused (an entry of ``REASONS`` in :mod:`._compiled`);
+        the joints outside their bounds; the event that closed at the sample
+        (found by ``method``), if any.
         """
-        code = _fused_step(time, q, tau_m, tau_j, self._model, self._buffers, out)
+        q, qd, tau_m, tau_j = sample
+        code = _fused_step(time, q, qd, tau_m, tau_j, self._model, self._buffers, out)
         status = code & 15
         if status >= _FAULT:
             return _REASONS[status - _FAULT], (), None
-        event = self._event(self._flags[2], method) if code & _EVENT else None
+        event = (
+            _event(self._flags[2, kernel.OPEN_START :].tolist(), method) if code & _EVENT else None
+        )
         mask = code >> _JOINTS_SHIFT
         return _STATUSES[status], _joints(mask) if self._masks is None else self._masks[mask], event
+
+    def block(
+        self,
+        t: FloatArray,
+        sample: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+        method: str,
+    ) -> tuple[np.ndarray, FloatArray, list[Event]]:
+        """A whole log as a fresh stream, by :func:`~sensorless.monitor._compiled.fused_block`.
+
+        ``t`` (n_samples,) [s]; ``sample`` is (q, qd, tau_m, tau_j), each
+        (n_samples, n_dof), ``qd`` (n_samples, 0) without a measured velocity.
+        The live stream's state is left alone. Returns the codes per sample,
+        the series (7, n_samples, n_dof) of :func:`fused_block` (NaN at faults)
+        and the events, the one still open at the end included.
+        """
+        q, qd, tau_m, tau_j = sample
+        n_samples, n = q.shape
+        buffers = _fresh(np.zeros_like(self._buffers))
+        series = np.full((7, n_samples, n), np.nan)
+        codes = np.zeros(n_samples, dtype=np.int64)
+        closed = np.zeros((n_samples, 5))
+        _fused_block(t, q, qd, tau_m, tau_j, self._model, buffers, series, codes, closed)
+        flags = buffers[: 3 * kernel.N_FLAGS].reshape(3, kernel.N_FLAGS)
+        events = [_event(row, method) for row in closed[np.flatnonzero(codes & _EVENT)].tolist()]
+        last = self._finish(flags[0], method)
+        return codes, series, events if last is None else [*events, last]
+
+    @staticmethod
+    def reason(status: int) -> str:
+        """What a fault status refused (an entry of ``REASONS`` in :mod:`._compiled`)."""
+        return _REASONS[status - _FAULT]
 
     @property
     def floor(self) -> float:
@@ -162,19 +201,36 @@ class FusedStream:
 
     def finish(self, method: str) -> Event | None:
         """Close the open event at the end of the stream, as ``Detector.finish``."""
-        flags = self._flags[0]
+        return self._finish(self._flags[0], method)
+
+    def _finish(self, flags: FloatArray, method: str) -> Event | None:
         if not (flags[kernel.HAS_STREAM] and flags[kernel.HAS_DETECTOR]):
             return None
         lasted = (
             flags[kernel.OPEN_END] - flags[kernel.OPEN_START] >= self._model[kernel.MIN_DURATION]
         )
-        event = self._event(flags, method) if flags[kernel.OPEN] and lasted else None
+        event = (
+            _event(flags[kernel.OPEN_START :].tolist(), method)
+            if flags[kernel.OPEN] and lasted
+            else None
+        )
         flags[kernel.OPEN] = flags[kernel.OUTSIDE] = 0.0
         return event
 
-    def _event(self, flags: FloatArray, method: str) -> Event:
-        start, end, joints, peak, peak_residual = flags[kernel.OPEN_START : kernel.N_FLAGS].tolist()
-        return Event(start, end, _joints(int(joints)), peak, peak_residual, method)
+
+def _fresh(buffers: FloatArray) -> FloatArray:
+    """``buffers`` as a stream that saw no sample (no time floor, nothing latched)."""
+    flags = buffers[: kernel.N_FLAGS]
+    flags[:] = 0.0
+    flags[[kernel.FLOOR, kernel.PENDING]] = -np.inf
+    flags[kernel.INSIDE_SINCE] = np.nan
+    return buffers
+
+
+def _event(fields: list[float], method: str) -> Event:
+    """An event from its (start, end, joints mask, peak, peak residual)."""
+    start, end, joints, peak, peak_residual = fields
+    return Event(start, end, _joints(int(joints)), peak, peak_residual, method)
 
 
 def _joints(mask: int) -> tuple[int, ...]:

@@ -23,11 +23,14 @@ from ..io import Log
 from ..signals import Event, ObserverSignals
 
 if TYPE_CHECKING:
+    from ._fused import FusedStream
     from .stream import CollisionMonitor
 
 __all__ = ["FaultSpan", "MonitorRun"]
 
 _SERIES = ("residual", "model_torque", "friction", "sign", "velocity", "acceleration")
+OBSERVER_FAULT = "the observer's output is not finite for this sample"
+BOUNDS_FAULT = "the threshold's bounds are not finite for this sample"
 
 
 @dataclass(frozen=True)
@@ -89,6 +92,8 @@ def run_log(monitor: CollisionMonitor, log: Log, *, strict: bool) -> MonitorRun:
     t, q = np.asarray(log.t), np.asarray(log.q)
     # A measured velocity (real arms log it) replaces the estimate, as in ``observe``.
     measured = None if kind == "acceleration" or log.qd is None else np.asarray(log.qd)
+    if monitor._fused is not None:
+        return _run_fused(monitor, monitor._fused, log, measured, strict=strict)
     n_samples, n_dof = q.shape
     bad = monitor.limits.bad_rows(q, measured, tau)
     reasons: dict[int, str] = {}  # refused inside a segment, by sample index
@@ -108,31 +113,121 @@ def run_log(monitor: CollisionMonitor, log: Log, *, strict: bool) -> MonitorRun:
         start = end + 1 if end < stop else stop
     if strict and bad.any():
         k = int(np.flatnonzero(bad)[0])
-        why = reasons.get(k) or _reason(monitor, q[k], tau[k])
+        why = reasons.get(k) or _reason(
+            monitor, q[k], None if measured is None else measured[k], tau[k]
+        )
         raise InputValueError(f"sample {k} (t = {t[k]:.6g} s) is a fault: {why}")
-    faults = _spans(t, bad, lambda k: reasons.get(k) or _reason(monitor, q[k], tau[k]))
+    faults = _spans(
+        t,
+        bad,
+        lambda k: (
+            reasons.get(k)
+            or _reason(monitor, q[k], None if measured is None else measured[k], tau[k])
+        ),
+    )
+    return _result(monitor, log, out, measured is not None, (events, faults, settling))
+
+
+def _result(
+    monitor: CollisionMonitor,
+    log: Log,
+    out: dict[str, FloatArray],
+    measured: bool,
+    found: tuple[list[Event], list[FaultSpan], np.ndarray],
+) -> MonitorRun:
+    """The :class:`MonitorRun` of ``log`` from the series ``out`` and what was found."""
+    events, faults, settling = found
+    kind = monitor.settings.kind
     signals = ObserverSignals(
-        t=t,
+        t=np.asarray(log.t),
         residual=out["residual"],
         model_torque=out["model_torque"],
         friction=out["friction"],
         sign=out["sign"],
         velocity=out["velocity"],
-        gain=monitor._observer.gain if kind != "acceleration" else np.full(n_dof, np.nan),
+        gain=monitor._observer.gain if kind != "acceleration" else np.full(log.n_dof, np.nan),
         kind=kind,
         robot=monitor.robot.name,
-        position=q,
+        position=np.asarray(log.q),
         acceleration=out["acceleration"] if kind == "acceleration" else None,
         metadata={
             **log.metadata,
             "observer": {
                 **monitor._observer.settings(),
-                "velocity": "filter" if measured is None else "measured",
+                "velocity": "measured" if measured else "filter",
             },
             "faults": len(faults),
         },
     )
     return MonitorRun(signals, sorted(events, key=lambda e: e.start), faults, settling)
+
+
+def _run_fused(
+    monitor: CollisionMonitor,
+    fused: FusedStream,
+    log: Log,
+    measured: FloatArray | None,
+    *,
+    strict: bool,
+) -> MonitorRun:
+    """:func:`run_log` on the compiled path: the stream's kernel over the whole log."""
+    t = np.ascontiguousarray(log.t, dtype=np.float64)
+    q = np.ascontiguousarray(log.q, dtype=np.float64)
+    n_samples = q.shape[0]
+    qd = (
+        np.empty((n_samples, 0))
+        if measured is None
+        else np.ascontiguousarray(measured, dtype=np.float64)
+    )
+    sensed = monitor.settings.kind == "joint"
+    tau_j = np.ascontiguousarray(log.tau_j if sensed else log.tau_m, dtype=np.float64)
+    # The joint-torque stream checks the motor torques' limits too, when the log has them.
+    tau_m = tau_j if log.tau_m is None else np.ascontiguousarray(log.tau_m, dtype=np.float64)
+    codes, series, events = fused.block(t, (q, qd, tau_m, tau_j), monitor.threshold.name)
+    status = codes & 15
+    bad = status >= fused.FAULT
+    settling = status == fused.SETTLING
+    out = dict(
+        zip(
+            ("residual", "model_torque", "friction", "sign", "velocity"),
+            series[[0, 3, 4, 5, 6]],
+            strict=True,
+        )
+    )
+
+    def reason(k: int) -> str:
+        return _fused_reason(
+            monitor, fused.reason(int(status[k])), k, (t, q, qd, tau_m, tau_j), series[6, k]
+        )
+
+    if strict and bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        raise InputValueError(f"sample {k} (t = {t[k]:.6g} s) is a fault: {reason(k)}")
+    return _result(
+        monitor, log, out, measured is not None, (events, _spans(t, bad, reason), settling)
+    )
+
+
+def _fused_reason(
+    monitor: CollisionMonitor,
+    reason: str,
+    k: int,
+    columns: tuple[FloatArray, ...],
+    velocity: FloatArray,
+) -> str:
+    """The message of the fault the kernel found at sample ``k``: that of the Python path."""
+    t, q, qd, tau_m, tau_j = columns
+    if reason == "q":
+        return monitor.limits.describe("q", q[k])
+    if reason in ("tau_m", "tau_j"):
+        return monitor.limits.describe(reason, (tau_m if reason == "tau_m" else tau_j)[k])
+    if reason == "qd":
+        return monitor.limits.describe("qd", qd[k] if qd.shape[1] else velocity)
+    if reason == "observer":
+        return OBSERVER_FAULT
+    if reason == "bounds":
+        return BOUNDS_FAULT
+    return f"the time rule {reason!r} refused t = {t[k]:.9g} s (previous {t[k - 1]:.9g} s)"
 
 
 def _segment(
@@ -178,11 +273,7 @@ def _segment(
     if refused.any():
         k = int(np.argmax(refused))
         end = start + k
-        reason = (
-            monitor.limits.describe("qd", velocity[k])
-            if fast[k]
-            else "the observer's output is not finite for this sample"
-        )
+        reason = monitor.limits.describe("qd", velocity[k]) if fast[k] else OBSERVER_FAULT
         if k == 0:
             return end, reason
         # Everything here is causal: the samples before k are those of a stream ending there.
@@ -264,10 +355,14 @@ def _rows(
     )
 
 
-def _reason(monitor: CollisionMonitor, q: FloatArray, tau: FloatArray) -> str:
+def _reason(
+    monitor: CollisionMonitor, q: FloatArray, qd: FloatArray | None, tau: FloatArray
+) -> str:
     limits = monitor.limits
     if not limits.position_ok(q):
         return limits.describe("q", q)
+    if qd is not None and not limits.velocity_ok(qd):
+        return limits.describe("qd", qd)
     return limits.describe("tau_j" if monitor.settings.kind == "joint" else "tau_m", tau)
 
 

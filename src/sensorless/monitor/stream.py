@@ -28,7 +28,7 @@ from ..observers import AccelerationObserver, MomentumObserver, ObserverSample, 
 from ..robots.model import RobotModel
 from ..signals import Event, ObserverSignals
 from ..thresholds import ModelBasedThreshold, Threshold, ThresholdInputs
-from .batch import MonitorRun, run_log
+from .batch import BOUNDS_FAULT, OBSERVER_FAULT, MonitorRun, run_log
 from .policy import StreamPolicy
 from .tuning import ObserverSettings
 
@@ -46,8 +46,6 @@ __all__ = ["BACKENDS", "CollisionMonitor"]
 #: Stream backends of :class:`CollisionMonitor`.
 BACKENDS = ("auto", "numba", "python")
 _STATUSES = ("ok", "collision", "settling")
-_OBSERVER_FAULT = "the observer's output is not finite for this sample"
-_BOUNDS_FAULT = "the threshold's bounds are not finite for this sample"
 
 
 @dataclass
@@ -239,7 +237,13 @@ class CollisionMonitor:
         return self._latched if self._fused is None else self._fused.latched
 
     def step(
-        self, t: float, q: ArrayLike, tau_m: ArrayLike, tau_j: ArrayLike | None = None
+        self,
+        t: float,
+        q: ArrayLike,
+        tau_m: ArrayLike,
+        tau_j: ArrayLike | None = None,
+        *,
+        qd: ArrayLike | None = None,
     ) -> Verdict:
         """Judge one sample of a live stream; never raises on bad data.
 
@@ -253,6 +257,10 @@ class CollisionMonitor:
             Motor (commanded) torques [N m], held until the next sample.
         tau_j : array-like of shape (n_dof,), optional
             Joint-torque-sensor torques [N m] (observer kind "joint").
+        qd : array-like of shape (n_dof,), optional
+            Measured joint velocities [rad/s]. They replace the estimate for
+            this sample (the estimator keeps running), as a log's ``qd``
+            columns do in :meth:`process`; the momentum observers only.
 
         Returns
         -------
@@ -268,10 +276,10 @@ class CollisionMonitor:
         if not math.isfinite(time):
             return self._fault(time, f"time must be finite; got {time}")
         if self._fused is not None:
-            return self._step_fused(self._fused, time, q, tau_m, tau_j)
+            return self._step_fused(self._fused, time, q, qd, tau_m, tau_j)
         if time <= self._floor:
             return self._fault(time, self._back_message(time, self._floor))
-        q_arr, tau, message = self._sample(q, tau_m, tau_j)
+        q_arr, qd_arr, tau, message = self._sample(q, qd, tau_m, tau_j)
         if message:
             self._pending = time
             return self._fault(time, message)
@@ -288,7 +296,7 @@ class CollisionMonitor:
                     self._pending = time
                     return self._fault(time, self._gap_message(step))
         try:
-            return self._judge(stream, restart, time, q_arr, tau)
+            return self._judge(stream, restart, time, (q_arr, qd_arr, tau))
         except Exception as exc:  # fail-safe: no data may crash the stream
             return self._fault(time, f"the sample could not be processed: {exc!r}")
 
@@ -305,35 +313,35 @@ class CollisionMonitor:
         )
 
     def _step_fused(
-        self, fused: FusedStream, time: float, q: Any, tau_m: Any, tau_j: Any
+        self, fused: FusedStream, time: float, q: Any, qd: Any, tau_m: Any, tau_j: Any
     ) -> Verdict:
         """:meth:`step` for a finite time, on the compiled path (which checks the floor)."""
         n = self._n_dof
         q_arr, message = as_sample(q, n, "q")
+        qd_arr, message_v = (_EMPTY, "") if qd is None else as_sample(qd, n, "qd")
         tau_arr, message_m = as_sample(tau_m, n, "tau_m")
         sensed, message_j = as_sample(tau_j, n, "tau_j") if self._joint else (tau_arr, "")
-        if message or message_m or message_j:  # the Python rules say which, in their order
+        if message or message_v or message_m or message_j:  # the Python rules say which
             if time <= fused.floor:
                 return self._fault(time, self._back_message(time, fused.floor))
             fused.refuse(time)
-            return self._fault(time, self._sample(q, tau_m, tau_j)[2])
+            return self._fault(time, self._sample(q, qd, tau_m, tau_j)[3])
         out = np.empty((3, n))
+        sample = (q_arr, qd_arr, tau_arr, sensed)
         try:
-            status, joints, event = fused.run(
-                time, q_arr, tau_arr, sensed, out, self.threshold.name
-            )
+            status, joints, event = fused.run(time, sample, out, self.threshold.name)
         except Exception as exc:  # fail-safe: no data may crash the stream
             return self._fault(time, f"the sample could not be processed: {exc!r}")
         if status in _STATUSES:
             return Verdict(cast(Any, status), time, joints, out[0], out[1], out[2], event)
-        return self._fault(time, self._fused_fault(fused, status, time, (q_arr, tau_arr, sensed)))
+        return self._fault(time, self._fused_fault(fused, status, time, sample))
 
     def _fused_fault(
         self, fused: FusedStream, reason: str, time: float, sample: tuple[FloatArray, ...]
     ) -> str:
         """The message of a fault the compiled step found: that of the Python path."""
         if reason in ("q", "tau_m", "tau_j"):
-            return self.limits.describe(reason, sample[("q", "tau_m", "tau_j").index(reason)])
+            return self.limits.describe(reason, sample[("q", "", "tau_m", "tau_j").index(reason)])
         if reason == "qd":
             return self.limits.describe("qd", fused.velocity)
         if reason == "time":
@@ -342,33 +350,50 @@ class CollisionMonitor:
             return self._early_message(time - fused.last)
         if reason == "gap":
             return self._gap_message(time - fused.last)
-        return _OBSERVER_FAULT if reason == "observer" else _BOUNDS_FAULT
+        return OBSERVER_FAULT if reason == "observer" else BOUNDS_FAULT
 
-    def _sample(self, q: Any, tau_m: Any, tau_j: Any) -> tuple[FloatArray, FloatArray, str]:
-        """The checked position and torque of one sample, or a fault message."""
+    def _sample(
+        self, q: Any, qd: Any, tau_m: Any, tau_j: Any
+    ) -> tuple[FloatArray, FloatArray | None, FloatArray, str]:
+        """The checked position, measured velocity (or None) and torque, or a fault message."""
         n = self.robot.n_dof
         joint = self.settings.kind == "joint"
         if joint and tau_j is None:
-            return _EMPTY, _EMPTY, "the joint-torque observer needs tau_j"
+            return _EMPTY, None, _EMPTY, "the joint-torque observer needs tau_j"
+        if qd is not None and self.settings.kind == "acceleration":
+            return _EMPTY, None, _EMPTY, "the acceleration observer estimates qd; give none"
         q_arr, message = as_sample(q, n, "q")
         if message:
-            return _EMPTY, _EMPTY, message
+            return _EMPTY, None, _EMPTY, message
         if not self.limits.position_ok(q_arr):
-            return _EMPTY, _EMPTY, self.limits.describe("q", q_arr)
+            return _EMPTY, None, _EMPTY, self.limits.describe("q", q_arr)
+        qd_arr = None
+        if qd is not None:
+            qd_arr, message = as_sample(qd, n, "qd")
+            if message:
+                return _EMPTY, None, _EMPTY, message
         torques = {"tau_m": tau_m, "tau_j": tau_j} if joint else {"tau_m": tau_m}
         tau = _EMPTY
         for name, value in torques.items():
             tau, message = as_sample(value, n, name)
             if message:
-                return _EMPTY, _EMPTY, message
+                return _EMPTY, None, _EMPTY, message
             if not self.limits.torque_ok(tau):
-                return _EMPTY, _EMPTY, self.limits.describe(name, tau)
-        return q_arr, tau, ""
+                return _EMPTY, None, _EMPTY, self.limits.describe(name, tau)
+        return q_arr, qd_arr, tau, ""
 
     def _judge(
-        self, stream: _Stream | None, restart: bool, time: float, q: FloatArray, tau: FloatArray
+        self,
+        stream: _Stream | None,
+        restart: bool,
+        time: float,
+        columns: tuple[FloatArray, FloatArray | None, FloatArray],
     ) -> Verdict:
-        """Run a sample with good inputs through the pipeline; commit only if all is finite."""
+        """Run a sample with good inputs through the pipeline; commit only if all is finite.
+
+        ``columns``: q [rad], the measured q̇ [rad/s] or None, τ [N m].
+        """
+        q, measured, tau = columns
         closed: Event | None = None
         if restart:
             if stream is not None and stream.detector is not None:
@@ -378,14 +403,16 @@ class CollisionMonitor:
             observer = (
                 None
                 if self.settings.kind == "acceleration"
-                else self._observer.initial_state(q, np.zeros_like(q))
+                else self._observer._initial_state_checked(
+                    q[None], np.zeros((1, q.size)) if measured is None else measured[None]
+                )
             )
             stream = _Stream(time, time, estimator, observer, None)
         assert stream is not None  # set above on a restart
         (_, velocity, acceleration), estimator = self._estimator._step_outputs(
             q, stream.estimator, self._outputs
         )
-        velocity = cast(FloatArray, velocity)
+        velocity = cast(FloatArray, velocity if measured is None else measured)
         if not self.limits.velocity_ok(velocity):
             self._pending = time
             return self._fault(time, self.limits.describe("qd", velocity))
@@ -406,7 +433,7 @@ class CollisionMonitor:
             acceleration is not None and not np.isfinite(acceleration).all()
         ):
             self._pending = time
-            return self._fault(time, _OBSERVER_FAULT)
+            return self._fault(time, OBSERVER_FAULT)
         residual, model_torque, friction, sign = sample
         settling = time - stream.start < self.settle
         detector = stream.detector
@@ -427,7 +454,7 @@ class CollisionMonitor:
             verdict, detector = self.detector._step_checked(detector, residual, inputs, time)
             if np.isnan(verdict.lower).any() or np.isnan(verdict.upper).any():
                 self._pending = time
-                return self._fault(time, _BOUNDS_FAULT)
+                return self._fault(time, BOUNDS_FAULT)
             if closed is not None and verdict.event is None:
                 verdict = _with(verdict, verdict.status, closed)
             verdict = self._latch(verdict)

@@ -176,7 +176,12 @@ def lwr_robot() -> sl.RobotModel:
         {"alpha": math.radians(al), "a": 0.0, "theta": 0.0, "d": d}
         for al, d in zip(TABLE_2_4_ALPHA_DEG, TABLE_2_4_D, strict=True)
     ]
-    links = [sl.LinkInertia(0.0, np.zeros(3), np.diag([0.0, 0.0, rng.uniform(0.1, 1.0)]))]
+    # Link 1: a massless rotor, one moment about its axis (no rigid body has only one).
+    links = [
+        sl.LinkInertia(
+            0.0, np.zeros(3), np.diag([0.0, 0.0, rng.uniform(0.1, 1.0)]), rigid_body=False
+        )
+    ]
     for _ in range(6):
         # COM in the y-z plane and principal axes turned about x only: XY = XZ = mX = 0.
         phi = rng.uniform(-np.pi, np.pi)

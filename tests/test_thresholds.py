@@ -18,6 +18,7 @@ import yaml
 from sensorless.exceptions import (
     DimensionError,
     InputValueError,
+    ModelMismatchError,
     NotFittedError,
     UnknownNameError,
 )
@@ -382,7 +383,7 @@ def test_signals_of_another_robot_kind_or_gain_are_rejected() -> None:
     with pytest.raises(DimensionError, match=message):
         th.bounds(other)
     renamed = signals(run.residual, parts(1), robot="panda")
-    with pytest.raises(InputValueError, match=r"signals come from panda \(3 joints\)"):
+    with pytest.raises(ModelMismatchError, match=r"signals come from panda \(3 joints\)"):
         th.bounds(renamed)
     with pytest.raises(
         InputValueError, match="fitted on 'motor' signals; these signals are 'joint'"
@@ -431,7 +432,7 @@ def test_bad_fit_data_is_rejected() -> None:
         ConstantThreshold().fit([])
     with pytest.raises(InputValueError, match="one signal kind"):
         ConstantThreshold().fit([run, signals(noise(1), p, kind="joint")])
-    with pytest.raises(DimensionError, match="one robot"):
+    with pytest.raises(ModelMismatchError, match="one robot"):
         ConstantThreshold().fit([run, signals(noise(1), p, robot="other")])
     with pytest.raises(InputValueError, match="one observer gain"):
         ConstantThreshold().fit([run, signals(noise(1), p, gain=1.0)])

@@ -18,7 +18,13 @@ import pytest
 import yaml
 
 from sensorless.detection import Detector
-from sensorless.exceptions import DimensionError, InputTypeError, InputValueError, NotFittedError
+from sensorless.exceptions import (
+    DimensionError,
+    InputTypeError,
+    InputValueError,
+    ModelMismatchError,
+    NotFittedError,
+)
 from sensorless.signals import ObserverSignals
 from sensorless.thresholds import (
     METHODS,
@@ -471,7 +477,7 @@ def test_pairs_must_come_from_one_run() -> None:
         InputValueError, match=r"velocity of the joint signals differs .* sample 7, joint 3"
     ):
         th.fit([pair(2, n=200), (motor, replace(joint, velocity=other))])
-    with pytest.raises(DimensionError, match=r"one robot.*'synthetic'.*'lwr4'"):
+    with pytest.raises(ModelMismatchError, match=r"one robot.*'synthetic'.*'lwr4'"):
         th.fit((motor, replace(joint, robot="lwr4")))
     with pytest.raises(InputValueError, match="one observer gain K_I"):
         th.fit((motor, replace(joint, gain=2 * GAIN)))
@@ -513,7 +519,7 @@ def test_signals_and_states_of_another_kind_are_rejected() -> None:
         Detector(th.for_kind(acceleration.kind)).detect(acceleration)
     with pytest.raises(InputTypeError, match="signals must be an ObserverSignals"):
         th.bounds(motor.residual)  # type: ignore[arg-type]
-    with pytest.raises(InputValueError, match=r"fitted for synthetic.*come from puma"):
+    with pytest.raises(ModelMismatchError, match=r"fitted for synthetic.*come from puma"):
         th.bounds(replace(motor, robot="puma"))
     with pytest.raises(InputValueError, match="observer gain"):
         th.bounds(replace(motor, gain=GAIN + 1.0))

@@ -17,6 +17,7 @@ __all__ = [
     "InputValueError",
     "LogFormatError",
     "ModelError",
+    "ModelMismatchError",
     "NotFittedError",
     "SensorlessError",
     "UnknownNameError",
@@ -41,6 +42,16 @@ class InputValueError(SensorlessError, ValueError):
 
 class ModelError(SensorlessError, ValueError):
     """A robot description is incomplete, inconsistent or cannot be read."""
+
+
+class ModelMismatchError(ModelError):
+    """Data made with one robot model meet another model with the same joint count.
+
+    A threshold fitted on the signals of one model, applied to (or fitted
+    together with) signals of another: another robot, the same arm with a
+    payload, other parameters. The shapes agree, the numbers do not. Joint
+    counts that differ are a :class:`DimensionError` instead.
+    """
 
 
 class UnknownNameError(SensorlessError, KeyError):

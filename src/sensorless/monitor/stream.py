@@ -22,7 +22,13 @@ from numpy.typing import ArrayLike
 
 from .._validation import FloatArray, as_sample, check_dt
 from ..detection import Detector, DetectorState, Verdict
-from ..exceptions import DimensionError, InputTypeError, InputValueError, UnknownNameError
+from ..exceptions import (
+    DimensionError,
+    InputTypeError,
+    InputValueError,
+    ModelMismatchError,
+    UnknownNameError,
+)
 from ..io import Log
 from ..observers import AccelerationObserver, MomentumObserver, ObserverSample, ObserverState
 from ..robots.model import RobotModel
@@ -93,6 +99,9 @@ class CollisionMonitor:
         The threshold is not fitted.
     DimensionError
         The robot and the threshold have different joint counts.
+    ModelMismatchError
+        The threshold was tuned for another robot model with the same joint
+        count (robot name: another robot, a payload, other parameters).
     InputValueError
         ``dt`` differs from the tuned period, or ``backend="numba"`` cannot run
         (numba missing, or a monitor the compiled step does not cover).
@@ -128,6 +137,12 @@ class CollisionMonitor:
             raise DimensionError(
                 f"threshold is for {threshold.n_dof_} joints ({threshold.robot_}); "
                 f"robot {robot.name!r} has {robot.n_dof}"
+            )
+        if threshold.robot_ not in ("", robot.name):
+            raise ModelMismatchError(
+                f"threshold is for robot {threshold.robot_!r} ({threshold.n_dof_} joints); robot "
+                f"{robot.name!r} has as many joints but is another model (another robot, a "
+                "payload or other parameters): tune on logs observed with this model"
             )
         self.robot = robot
         self.threshold = threshold

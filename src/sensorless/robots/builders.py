@@ -221,7 +221,7 @@ def _coerce_links(links: Sequence[Any], n_dof: int) -> list[LinkInertia]:
         raise DimensionError(
             f"expected inertial data for {n_dof} links (one per DH row); got {len(links)}"
         )
-    return [LinkInertia.coerce(link) for link in links]
+    return [LinkInertia.coerce(link, f"link{i}") for i, link in enumerate(links, start=1)]
 
 
 def _armature(motors: MotorsLike, n_dof: int) -> FloatArray:

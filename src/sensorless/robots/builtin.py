@@ -71,7 +71,12 @@ def puma560() -> RobotModel:
         (0.3e-3, 0.4e-3, 0.3e-3),
         (0.15e-3, 0.15e-3, 0.04e-3),
     ]
-    links = [LinkInertia(m, c, np.diag(i)) for m, c, i in zip(masses, coms, principal, strict=True)]
+    # The moments of links 1 and 3 break the triangle inequality of a rigid body
+    # (link 1: one moment only; link 3: 0.086 > 0.066 + 0.0125): published as is.
+    links = [
+        LinkInertia(m, c, np.diag(i), f"link{k}", rigid_body=k not in (1, 3))
+        for k, (m, c, i) in enumerate(zip(masses, coms, principal, strict=True), start=1)
+    ]
     gear = np.array([-62.6111, 107.815, -53.7063, 76.0364, 71.923, 76.686])
     motors = MotorData(rotor_inertia=[200e-6] * 3 + [33e-6] * 3, gear_ratio=gear)
     viscous_motor = np.array([1.48e-3, 0.817e-3, 1.38e-3, 71.2e-6, 82.6e-6, 36.7e-6])

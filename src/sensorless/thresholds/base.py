@@ -80,6 +80,7 @@ from .checks import (
     check_joints,
     check_runs,
     check_state,
+    robot_mismatch,
 )
 from .files import METHODS, load_threshold, save_threshold, threshold_from_dict, threshold_to_dict
 from .filtering import first_order, first_order_step
@@ -289,8 +290,10 @@ class Threshold(abc.ABC):
             Before :meth:`fit`.
         DimensionError
             Another number of joints.
+        ModelMismatchError
+            The same number of joints, another robot model (name).
         InputValueError
-            Another robot name, signal kind or observer gain.
+            Another signal kind or observer gain.
         """
         self._check_fitted()
         if not isinstance(signals, ObserverSignals):
@@ -298,10 +301,11 @@ class Threshold(abc.ABC):
                 f"signals must be an ObserverSignals; got {type(signals).__name__}"
             )
         if signals.n_dof != self.n_dof_ or signals.robot != self.robot_:
-            error = DimensionError if signals.n_dof != self.n_dof_ else InputValueError
-            raise error(
+            raise robot_mismatch(
                 f"thresholds fitted for {self.robot_ or '<unnamed>'} ({self.n_dof_} joints); "
-                f"signals come from {signals.robot or '<unnamed>'} ({signals.n_dof} joints)"
+                f"signals come from {signals.robot or '<unnamed>'} ({signals.n_dof} joints)",
+                self.n_dof_,
+                signals.n_dof,
             )
         self._check_kind(signals.kind)
         if not np.allclose(signals.gain, self.gain_, rtol=1e-9, atol=0.0, equal_nan=True):

@@ -23,7 +23,13 @@ from .._validation import (
     check_increasing,
     first_irregular_step,
 )
-from ..exceptions import DimensionError, InputTypeError, InputValueError
+from ..exceptions import (
+    DimensionError,
+    InputTypeError,
+    InputValueError,
+    ModelMismatchError,
+    SensorlessError,
+)
 from ..signals import ObserverSignals
 from .state import ThresholdInputs, ThresholdState
 
@@ -36,6 +42,7 @@ __all__ = [
     "check_runs",
     "check_state",
     "regular_period",
+    "robot_mismatch",
 ]
 
 SERIES = ("model_torque", "friction", "sign", "velocity")
@@ -96,15 +103,33 @@ def as_runs(signals: Any) -> list[ObserverSignals]:
     return list(runs)
 
 
+def robot_mismatch(message: str, expected_n_dof: int, n_dof: int) -> SensorlessError:
+    """The error for signals of another robot model than expected, ``message`` first.
+
+    Joint counts that differ are a :class:`DimensionError`; the same joint
+    count with another model (robot name: another robot, a payload, other
+    parameters) is a :class:`ModelMismatchError`.
+    """
+    if n_dof != expected_n_dof:
+        return DimensionError(message)
+    return ModelMismatchError(
+        f"{message}: the joint counts match but the robot models differ (another robot, a "
+        "payload or other parameters); use signals of one model, or fit again on signals "
+        "of the model in use"
+    )
+
+
 def check_runs(runs: list[ObserverSignals]) -> None:
     """Fit runs of one robot, signal kind and gain, with increasing time and finite signals."""
     first = runs[0]
     for i, run in enumerate(runs):
         what = f"fit run {i}"
         if run.n_dof != first.n_dof or run.robot != first.robot:
-            raise DimensionError(
+            raise robot_mismatch(
                 f"all fit runs must come from one robot; run 0 is {first.robot!r} "
-                f"({first.n_dof} joints), {what} is {run.robot!r} ({run.n_dof} joints)"
+                f"({first.n_dof} joints), {what} is {run.robot!r} ({run.n_dof} joints)",
+                first.n_dof,
+                run.n_dof,
             )
         if run.kind != first.kind:
             raise InputValueError(

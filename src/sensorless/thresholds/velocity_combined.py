@@ -57,7 +57,7 @@ from .._validation import FloatArray
 from ..exceptions import DimensionError, InputTypeError, InputValueError
 from ..signals import ObserverSignals
 from .base import StreamBounds
-from .checks import check_runs
+from .checks import check_runs, robot_mismatch
 from .fitting import BoolArray, stack
 from .state import ThresholdInputs, ThresholdState
 from .velocity_bins import BinTable, VelocityBinsThreshold, initial_friction
@@ -141,9 +141,11 @@ def _check_pairs(motor: list[ObserverSignals], joint: list[ObserverSignals]) -> 
     check_runs(joint)
     m, s = motor[0], joint[0]
     if m.n_dof != s.n_dof or m.robot != s.robot:
-        raise DimensionError(
+        raise robot_mismatch(
             f"motor and joint signals must come from one robot; the motor runs are {m.robot!r} "
-            f"({m.n_dof} joints), the joint runs {s.robot!r} ({s.n_dof} joints)"
+            f"({m.n_dof} joints), the joint runs {s.robot!r} ({s.n_dof} joints)",
+            m.n_dof,
+            s.n_dof,
         )
     if not np.allclose(m.gain, s.gain, rtol=1e-9, atol=0.0):
         raise InputValueError(
@@ -367,6 +369,8 @@ class CombinedVelocityThreshold(VelocityBinsThreshold):
             time or velocity; an unknown ``weighting``; bad hyper-parameters.
         DimensionError
             Runs of different joint counts or lengths.
+        ModelMismatchError
+            Runs of different robot models with the same joint count.
         """
         motor, joint = _as_pairs(signals)
         _check_pairs(motor, joint)

@@ -6,9 +6,11 @@ outside samples form an event; ``start`` and ``end`` are the times of its
 first and last outside sample. Two events whose gap (start of the second
 minus end of the first) is shorter than ``hold`` [s] are merged, and events
 lasting less than ``min_duration`` [s] (``end - start``) are dropped, after
-merging. An event's ``joints`` are those outside at any of its samples and
-its ``peak`` is the largest excursion beyond a bound (the first one if
-several are equal).
+merging; both compare up to :data:`TIME_TOLERANCE` (1 ns), so that a whole
+number of sample periods equal to ``hold`` or ``min_duration`` counts as
+equal at every sample rate. An event's ``joints`` are those outside at any
+of its samples and its ``peak`` is the largest excursion beyond a bound (the
+first one if several are equal).
 
 :meth:`Detector.run` / :meth:`Detector.detect` work on a recorded run;
 :meth:`Detector.initial_state`, :meth:`Detector.step` and
@@ -48,9 +50,10 @@ Two bumps 10 ms apart are one event when ``hold`` is longer than the gap:
 from __future__ import annotations
 
 from ._results import DetectionResult, DetectorState, Status, Verdict, events_to_pandas
-from .detector import Detector
+from .detector import TIME_TOLERANCE, Detector
 
 __all__ = [
+    "TIME_TOLERANCE",
     "DetectionResult",
     "Detector",
     "DetectorState",

@@ -21,7 +21,19 @@ from ..thresholds.checks import as_inputs, as_samples, check_joints
 from ..thresholds.state import ThresholdInputs
 from ._results import BoolArray, DetectionResult, DetectorState, Verdict, _merged
 
-__all__ = ["Detector"]
+__all__ = ["TIME_TOLERANCE", "Detector"]
+
+TIME_TOLERANCE = 1e-9
+"""A duration or a gap within this of ``min_duration`` or ``hold`` counts as equal to it [s].
+
+Event times are sample times, so an event of k periods lasts k·dt only up to
+rounding (0.105 - 0.1 = 0.004999… s): without a tolerance, ``min_duration`` =
+5 ms would drop a 6-sample event at 1 kHz, and a gap of exactly ``hold``
+would merge or not by chance. The rules are ``end - start >= min_duration -
+TIME_TOLERANCE`` (kept) and ``gap < hold - TIME_TOLERANCE`` (merged). 1 ns
+is above the rounding of a difference of time stamps below 10⁶ s and far
+below any sample period.
+"""
 
 _STREAM_INPUTS = ("residual", "model_torque", "friction", "sign", "velocity")
 
@@ -44,8 +56,16 @@ class Detector:
         Joints to monitor (1-based); by default those of the threshold.
     min_duration : float
         Events shorter than this (``end - start``) are dropped [s], >= 0.
+        An event of k samples lasts (k - 1)·dt, so at a period dt it needs
+        ⌈min_duration/dt⌉ + 1 samples: 6 at 1 kHz, 2 at 100 Hz for 5 ms.
     hold : float
         Events separated by less than this are merged [s], >= 0.
+
+    Notes
+    -----
+    Durations and gaps are compared up to :data:`TIME_TOLERANCE` (1 ns), so a
+    whole number of sample periods equal to ``min_duration`` or ``hold`` counts
+    as equal despite the rounding of the time stamps.
     """
 
     def __init__(
@@ -80,7 +100,7 @@ class Detector:
     # ----------------------------------------------------------------- events
 
     def _close(self, event: Event | None) -> Event | None:
-        if event is None or event.duration < self.min_duration:
+        if event is None or not _lasted(event.duration, self.min_duration):
             return None
         return dataclasses.replace(event, method=self.threshold.name)
 
@@ -108,7 +128,7 @@ class Detector:
                 peak=float(segment[row, col]),
                 peak_residual=float(residual[first + row, col]),
             )
-            if current is not None and run.start - current.end < self.hold:
+            if current is not None and not _lasted(run.start - current.end, self.hold):
                 current = _merged(current, run)
                 continue
             closed = self._close(current)
@@ -284,16 +304,20 @@ class Detector:
         if joints:
             k = int(np.argmax(excursion))
             sample = Event(time, time, joints, float(excursion[k]), float(r[cols[k]]))
-            if current is not None and (state.outside or time - current.end < self.hold):
+            if current is not None and (
+                state.outside or not _lasted(time - current.end, self.hold)
+            ):
                 current = _merged(current, sample)
             else:
                 ended = self._close(current)
                 current = sample
-        elif current is not None and time - current.end >= self.hold:
+        elif current is not None and _lasted(time - current.end, self.hold):
             ended = self._close(current)
             current = None
         confirmed = (
-            bool(joints) and current is not None and time - current.start >= self.min_duration
+            bool(joints)
+            and current is not None
+            and _lasted(time - current.start, self.min_duration)
         )
         verdict = Verdict("collision" if confirmed else "ok", time, joints, r, lower, upper, ended)
         return verdict, DetectorState(state.dt, threshold_state, time, bool(joints), current)
@@ -315,6 +339,11 @@ class Detector:
 
 
 # --------------------------------------------------------------------------- helpers
+
+
+def _lasted(span: float, limit: float) -> bool:
+    """``span >= limit`` [s] up to :data:`TIME_TOLERANCE` (the rounding of time differences)."""
+    return span >= limit - TIME_TOLERANCE
 
 
 def _valid_samples(signals: ObserverSignals) -> BoolArray:

@@ -364,7 +364,11 @@ class DirtyDerivative(CausalEstimator):
     staircase position and is off by ``O(dt/τ)``) and maps ``s = 0`` to
     ``z = 1`` exactly: the numerator is ``b0 (1 - z⁻¹)``, kept as an exact
     backward difference followed by the first-order section ``b0 dt / (1 + a1 z⁻¹)``.
-    The delays are ``τ`` (velocity) and ``2 τ`` (acceleration).
+    The delays are ``τ`` (velocity) and ``2 τ`` (acceleration) at every rate.
+    The bilinear transform warps frequency: the low-pass's digital -3 dB point
+    is ``atan(π dt cutoff) / (π dt)`` [Hz], close to ``cutoff`` only when it is
+    well below the Nyquist frequency (20 Hz gives 19.97 Hz at 1 kHz, 17.86 Hz
+    at 100 Hz).
 
     Parameters
     ----------
@@ -417,7 +421,11 @@ class Butterworth(CausalEstimator):
     exactly zero velocity for a robot at rest. The three outputs are therefore
     mutually consistent (velocity is the backward difference of position).
     Delays: ``d``, ``d + dt/2`` and ``d + dt`` with ``d`` the group delay of
-    ``B`` at DC, close to ``1 / (2π cutoff sin(π / (2 order)))``.
+    ``B`` at DC, ``1 / (ω_a sin(π / (2 order)))`` with the prewarped
+    ``ω_a = (2 / dt) tan(π cutoff dt)`` (the analog prototype's DC delay; the
+    bilinear transform keeps it): close to ``1 / (2π cutoff sin(π / (2 order)))``
+    when ``cutoff`` is well below the Nyquist frequency, shorter at low rates
+    (20 Hz, 5th order: 25.7 ms at 1 kHz, 22.3 ms at 100 Hz).
 
     Parameters
     ----------

@@ -17,10 +17,10 @@ import yaml
 
 from sensorless.exceptions import (
     DimensionError,
+    FileFormatError,
     InputValueError,
     ModelMismatchError,
     NotFittedError,
-    UnknownNameError,
 )
 from sensorless.signals import ObserverSignals
 from sensorless.thresholds import (
@@ -449,29 +449,32 @@ def test_bad_fit_data_is_rejected() -> None:
 
 
 def test_bad_threshold_files_are_rejected(tmp_path: Path) -> None:
+    # tests/test_file_schemas.py has the full table of bad files; these are the API's cases.
     th, _ = fitted("constant")
     data = th.to_dict()
-    with pytest.raises(UnknownNameError, match="unknown threshold method 'magic'; valid methods"):
+    with pytest.raises(FileFormatError, match="unknown threshold method 'magic'; valid methods"):
         Threshold.from_dict(dict(data, method="magic"))
     path = tmp_path / "t.yaml"
     path.write_text(yaml.safe_dump(dict(data, method="magic")))
-    with pytest.raises(UnknownNameError, match="'magic'"):
+    with pytest.raises(FileFormatError, match=r"t\.yaml: method: unknown threshold method 'magic'"):
         load_threshold(path)
-    with pytest.raises(InputValueError, match=r"lacks \['attributes'\]"):
+    with pytest.raises(FileFormatError, match="attributes: required key is missing"):
         Threshold.from_dict({k: v for k, v in data.items() if k != "attributes"})
     with pytest.raises(InputValueError, match="holds a 'constant' threshold, not 'velocity'"):
         VelocityThreshold.from_dict(data)
-    with pytest.raises(InputValueError, match="has attributes"):
+    with pytest.raises(FileFormatError, match=r"attributes.alpha_: unknown key.*beta_: required"):
         Threshold.from_dict(dict(data, attributes={"alpha_": [1.0, 2.0, 3.0]}))
-    with pytest.raises(DimensionError, match="one value per joint"):
+    with pytest.raises(
+        FileFormatError, match=r"beta_: expected shape \(n_dof,\) = \(3,\); got \(2,\)"
+    ):
         Threshold.from_dict(dict(data, attributes={"beta_": [1.0, 2.0]}))
-    with pytest.raises(TypeError):
+    with pytest.raises(FileFormatError, match=r"params\.speed: unknown key"):
         Threshold.from_dict(dict(data, params={"margin": 0.0, "speed": 1.0}))
     path.write_text("method: [unclosed")
-    with pytest.raises(InputValueError, match="not a YAML threshold file"):
+    with pytest.raises(FileFormatError, match="is not valid YAML"):
         load_threshold(path)
     path.write_text("- just a list")
-    with pytest.raises(InputValueError, match="must be a mapping"):
+    with pytest.raises(FileFormatError, match="holds a YAML mapping"):
         load_threshold(path)
 
 

@@ -20,6 +20,7 @@ import yaml
 from sensorless.detection import Detector
 from sensorless.exceptions import (
     DimensionError,
+    FileFormatError,
     InputTypeError,
     InputValueError,
     ModelMismatchError,
@@ -538,16 +539,16 @@ def test_signals_and_states_of_another_kind_are_rejected() -> None:
 def test_bad_threshold_files_are_rejected() -> None:
     th, _ = noisy_fit()
     data = th.to_dict()
-    with pytest.raises(InputValueError, match="has kind 'motor\\+joint'; got 'motor'"):
+    with pytest.raises(FileFormatError, match="has kind 'motor\\+joint'; got 'motor'"):
         CombinedVelocityThreshold.from_dict(data | {"kind": "motor"})
     weights = dict(data["attributes"], weights_=[[0.5, 0.5, 0.5]])
-    with pytest.raises(DimensionError, match=r"weights_ must have shape \(2, 3\)"):
+    with pytest.raises(FileFormatError, match=r"weights_: expected shape \(2, n_dof\) = \(2, 3\)"):
         CombinedVelocityThreshold.from_dict(data | {"attributes": weights})
     short = dict(data["attributes"], tau_sfe_=data["attributes"]["tau_sfe_"][:-1])
-    with pytest.raises(DimensionError, match="tau_sfe_ must have shape"):
+    with pytest.raises(FileFormatError, match="tau_sfe_: expected shape"):
         CombinedVelocityThreshold.from_dict(data | {"attributes": short})
     missing = {k: v for k, v in data["attributes"].items() if k != "lower_joint_"}
-    with pytest.raises(InputValueError, match="the description has"):
+    with pytest.raises(FileFormatError, match="lower_joint_: required key is missing"):
         CombinedVelocityThreshold.from_dict(data | {"attributes": missing})
     with pytest.raises(
         InputValueError, match="holds a 'velocity_combined' threshold, not 'velocity'"

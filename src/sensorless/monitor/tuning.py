@@ -23,6 +23,7 @@ from .._validation import check_dt
 from ..exceptions import FileFormatError, InputTypeError, InputValueError, UnknownNameError
 from ..filters import Butterworth, CausalEstimator, DirtyDerivative, FiniteDifference
 from ..io import Log
+from ..io.file_schema import read_yaml_mapping
 from ..observers import default_estimator, observe
 from ..robots.model import RobotModel
 from ..signals import ObserverSignals
@@ -33,6 +34,7 @@ from ..thresholds import (
     TimeVariantThreshold,
     VelocityThreshold,
 )
+from ..thresholds.files import threshold_from_dict
 from .calibration import (
     DEFAULT_HOLD,
     DEFAULT_MIN_DURATION,
@@ -283,19 +285,11 @@ def load_tuned(path: str | Path) -> tuple[Threshold, ObserverSettings]:
 
     A saved calibration comes back as the threshold's ``calibration_``.
     """
-    try:
-        data = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, yaml.YAMLError) as exc:
-        reason = "not a text file" if isinstance(exc, UnicodeDecodeError) else "not valid YAML"
-        raise FileFormatError(
-            f"{path} is not a threshold file ({reason}); give a file written by `tune`"
-        ) from None
-    if not isinstance(data, dict):
-        raise FileFormatError(f"{path} is not a threshold file (expected a YAML mapping)")
+    data = read_yaml_mapping(path, "threshold")
     settings_data = data.pop("observer", None)
     calibration_data = data.pop("calibration", None)
     try:
-        threshold = Threshold.from_dict(data)
+        threshold = threshold_from_dict(data, Threshold, source=f"threshold file {path}")
         if calibration_data is not None:
             attach_calibration(threshold, Calibration.from_dict(calibration_data))
     except (InputValueError, InputTypeError) as exc:

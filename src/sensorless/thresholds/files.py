@@ -1,12 +1,21 @@
 """The file format of fitted thresholds and the registry of families that reads it.
 
 A fitted threshold is a plain mapping (:func:`threshold_to_dict`) written as
-readable YAML (:func:`save_threshold`): the method name, the library
-version, the robot name, the signal kind, n_dof, the observer gain K_I
-[1/s], the sample period [s], the hyper-parameters and the fitted
+readable YAML (:func:`save_threshold`): the format version, the method name,
+the library version, the robot name, the signal kind, n_dof, the observer
+gain K_I [1/s], the sample period [s], the hyper-parameters and the fitted
 attributes as (nested) lists. :func:`load_threshold` reads it back and
 dispatches on the method name through :data:`METHODS`, which every family
 joins by defining the class attribute ``name``.
+
+Reading checks the file against its declared format
+(:mod:`sensorless.thresholds.file_schema`) before anything is built: the
+envelope, the hyper-parameters of the family (those of its constructor) and
+the shape and sign of every fitted attribute. A mistake is one
+:class:`~sensorless.exceptions.FileFormatError` that lists every problem
+with the path of its field (``params.margni: unknown key; did you mean
+'margin'?``, ``attributes.alpha_: expected finite numbers >= 0; got -5.0 at
+[0]``); a file written in a newer ``format_version`` is refused.
 """
 
 from __future__ import annotations
@@ -17,15 +26,33 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import yaml
+from pydantic import ValidationError
 
 from .._version import __version__
-from ..exceptions import DimensionError, InputValueError, UnknownNameError
+from ..exceptions import DimensionError, FileFormatError, InputValueError
+from ..io.file_schema import (
+    Problem,
+    check_format_version,
+    did_you_mean,
+    file_error,
+    problems_of,
+    read_yaml_mapping,
+    shown,
+)
+from .file_schema import (
+    ATTRIBUTE_SELECTORS,
+    THRESHOLD_FORMAT_VERSION,
+    ThresholdFile,
+    attribute_problems,
+    params_model,
+)
 
 if TYPE_CHECKING:
     from .base import Threshold
 
 __all__ = [
     "METHODS",
+    "THRESHOLD_FORMAT_VERSION",
     "load_threshold",
     "save_threshold",
     "threshold_from_dict",
@@ -35,10 +62,23 @@ __all__ = [
 METHODS: dict[str, type[Threshold]] = {}
 """Threshold families by name (``"constant"``, ``"time_variant"``, ``"velocity"``, ...)."""
 
-_FILE_KEYS = ("method", "robot", "kind", "n_dof", "gain", "dt", "params", "attributes")
 _FILE_HEADER = (
     "# sensorless fitted threshold; read it with sensorless.thresholds.load_threshold(path)\n"
 )
+
+
+def _method_problem(method: Any) -> Problem | None:
+    if not isinstance(method, str) or method in METHODS:
+        return None  # a missing or non-text method is the envelope's to report
+    hint = did_you_mean(method, sorted(METHODS))
+    hint = hint if hint.startswith("; did you mean") else ""
+    valid = ", ".join(sorted(METHODS))
+    return Problem(
+        ("method",), f"unknown threshold method {method!r}{hint}; valid methods: {valid}"
+    )
+
+
+# ----------------------------------------------------------------------------- read, write
 
 
 def _to_builtin(value: Any) -> Any:
@@ -55,6 +95,7 @@ def threshold_to_dict(threshold: Threshold) -> dict[str, Any]:
     """A fitted threshold as plain Python values (what :func:`save_threshold` writes)."""
     threshold._check_fitted()
     return {
+        "format_version": THRESHOLD_FORMAT_VERSION,
         "method": threshold.name,
         "library_version": __version__,
         "robot": threshold.robot_,
@@ -70,7 +111,42 @@ def threshold_to_dict(threshold: Threshold) -> dict[str, Any]:
     }
 
 
-def threshold_from_dict(data: Mapping[str, Any], expected: type[Threshold] | None) -> Threshold:
+def _checked(data: Any, source: str) -> tuple[ThresholdFile, type[Threshold]]:
+    """The envelope and the family of a description, params checked; else one error."""
+    if not isinstance(data, Mapping):
+        raise file_error(source, [Problem((), f"expected a mapping; got {shown(data)}")])
+    check_format_version(data, THRESHOLD_FORMAT_VERSION, source, "threshold")
+    n_dof = data.get("n_dof")
+    valid_n = isinstance(n_dof, int) and not isinstance(n_dof, bool) and n_dof >= 1
+    context = {"n_dof": n_dof} if valid_n else None
+    problems: list[Problem] = []
+    envelope = None
+    try:
+        envelope = ThresholdFile.model_validate(dict(data), context=context)
+    except ValidationError as exc:
+        problems += problems_of(exc, ThresholdFile)
+    method, params = data.get("method"), data.get("params")
+    unknown = _method_problem(method)
+    if unknown is not None:
+        problems.insert(0, unknown)
+    family = METHODS.get(method) if isinstance(method, str) else None
+    if family is not None and isinstance(params, dict):
+        model = params_model(family)
+        try:
+            model.model_validate(params, context=context)
+        except ValidationError as exc:
+            problems += problems_of(exc, model, ("params",))
+    if problems or envelope is None or family is None:
+        raise file_error(source, problems)
+    return envelope, family
+
+
+def threshold_from_dict(
+    data: Mapping[str, Any],
+    expected: type[Threshold] | None,
+    *,
+    source: str = "threshold description",
+) -> Threshold:
     """Rebuild a fitted threshold from :func:`threshold_to_dict` output.
 
     Parameters
@@ -79,53 +155,45 @@ def threshold_from_dict(data: Mapping[str, Any], expected: type[Threshold] | Non
         The description; its ``method`` selects the family in :data:`METHODS`.
     expected : type, optional
         Family (or base class) the description must hold; None for any.
+    source : str
+        What ``data`` is, for messages (e.g. ``"threshold file th.yaml"``).
+
+    Raises
+    ------
+    FileFormatError
+        The description does not follow the format: every problem with the
+        path of its field (keys, types, shapes, non-finite or wrongly signed
+        fitted values, a newer ``format_version``).
+    InputValueError
+        A valid description of another family than ``expected``.
     """
-    if not isinstance(data, Mapping):
+    envelope, family = _checked(data, source)
+    if expected is not None and not issubclass(family, expected):
         raise InputValueError(
-            f"a threshold description must be a mapping; got {type(data).__name__}"
+            f"the description holds a {family.name!r} threshold, not {expected.name!r}"
         )
-    missing = [key for key in _FILE_KEYS if key not in data]
-    if missing:
-        raise InputValueError(
-            f"threshold description lacks {missing}; expected keys {list(_FILE_KEYS)}"
-        )
-    method = data["method"]
-    target = METHODS.get(method)
-    if target is None:
-        raise UnknownNameError(
-            f"unknown threshold method {method!r}; valid methods: {sorted(METHODS)}"
-        )
-    if expected is not None and not issubclass(target, expected):
-        raise InputValueError(
-            f"the description holds a {method!r} threshold, not {expected.name!r}"
-        )
-    threshold = target(**dict(data["params"]))
-    threshold.robot_ = str(data["robot"])
-    threshold.kind_ = str(data["kind"])
-    threshold.n_dof_ = int(data["n_dof"])
-    threshold.gain_ = np.asarray(data["gain"], dtype=np.float64)
-    threshold.dt_ = float(data["dt"])
-    if threshold.gain_.shape != (threshold.n_dof_,):
-        raise DimensionError(
-            f"gain must have {threshold.n_dof_} values; got shape {threshold.gain_.shape}"
-        )
-    attributes = dict(data["attributes"])
-    names = threshold._attribute_names()
-    if sorted(attributes) != sorted(names):
-        raise InputValueError(
-            f"a {method!r} threshold has attributes {list(names)}; "
-            f"the description has {sorted(attributes)}"
-        )
-    for name in names:
-        dtype = np.int64 if name in threshold._integer_attributes else np.float64
-        try:
-            value = np.asarray(attributes[name], dtype=dtype)
-        except (TypeError, ValueError):
-            raise InputValueError(
-                f"attribute {name} must be a (nested) list of numbers; got {attributes[name]!r}"
-            ) from None
+    threshold = family(**dict(data["params"]))
+    threshold.robot_ = envelope.robot
+    threshold.kind_ = envelope.kind
+    threshold.n_dof_ = envelope.n_dof
+    threshold.gain_ = np.asarray(envelope.gain, dtype=np.float64)
+    threshold.dt_ = float(envelope.dt)
+    params = threshold.get_params()
+    selected = ", ".join(f"params.{k}: {params[k]!r}" for k in ATTRIBUTE_SELECTORS if k in params)
+    problems, arrays = attribute_problems(
+        threshold._attribute_names(),
+        envelope.attributes,
+        envelope.n_dof,
+        f" for {selected}" if selected else "",
+    )
+    if problems:
+        raise file_error(source, problems)
+    for name, value in arrays.items():
         setattr(threshold, name, value)
-    threshold._check_attributes()
+    try:
+        threshold._check_attributes()
+    except (DimensionError, InputValueError) as exc:
+        raise FileFormatError(f"{source}: {exc}") from None
     return threshold
 
 
@@ -144,14 +212,10 @@ def load_threshold(path: str | Path) -> Threshold:
     ------
     FileNotFoundError
         No such file.
-    InputValueError
-        Not a threshold file.
-    UnknownNameError
-        A method that is not in :data:`METHODS`.
+    FileFormatError
+        Not a threshold file: binary, not UTF-8, not YAML, not a mapping, a
+        newer format, or a description that does not follow the format (every
+        problem with the path of its field).
     """
-    text = Path(path).read_text(encoding="utf-8")
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise InputValueError(f"{path} is not a YAML threshold file: {exc}") from None
-    return threshold_from_dict(data, None)
+    data = read_yaml_mapping(path, "threshold")
+    return threshold_from_dict(data, None, source=f"threshold file {path}")

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import yaml
 
-from sensorless.exceptions import ModelError, UnknownNameError
+from sensorless.exceptions import FileFormatError, ModelError, UnknownNameError
 from sensorless.io import read_log
 from sensorless.simulation.plants import RigidPlant
 from sensorless.simulation.scenario import (
@@ -67,11 +67,11 @@ def test_unknown_and_malformed_scenarios_give_clear_errors(tmp_path) -> None:
     spec["colisions"] = []
     path = tmp_path / "typo.yaml"
     path.write_text(yaml.safe_dump(spec))
-    with pytest.raises(ModelError, match="unknown keys \\['colisions'\\]"):
+    with pytest.raises(FileFormatError, match="colisions: unknown key; did you mean 'collisions'"):
         load_scenario(path)
     del spec["colisions"], spec["trajectory"]
     path.write_text(yaml.safe_dump(spec))
-    with pytest.raises(ModelError, match="missing keys \\['trajectory'\\]"):
+    with pytest.raises(FileFormatError, match="trajectory: required key is missing"):
         load_scenario(path)
     spec = copy.deepcopy(load_scenario("panda-gaz").spec)
     spec["trajectory"]["type"] = "spline"

@@ -5,7 +5,8 @@ a :class:`CollisionMonitor` applies it to a recorded log
 (:meth:`~CollisionMonitor.run`, :meth:`~CollisionMonitor.process`) or to a
 live stream one sample at a time (:meth:`~CollisionMonitor.step`), with the
 same result (:mod:`.stream`, :mod:`.batch`), under the fault, restart,
-settling and latching rules of :mod:`.policy`. :func:`tune` also
+settling and latching rules of :mod:`.policy`, optionally adapting its
+nominal friction to drift (:mod:`.adaptation`). :func:`tune` also
 cross-validates the threshold on its collision-free logs and can set the
 margin for a stated false-alarm rate (:func:`cross_validate`,
 :func:`margin_for_rate`, :mod:`.calibration`); observer settings and that
@@ -16,6 +17,7 @@ Units SI and radians; time along axis 0.
 
 from __future__ import annotations
 
+from .adaptation import Adaptation
 from .batch import FaultSpan, MonitorRun
 from .calibration import (
     Calibration,
@@ -39,6 +41,7 @@ from .tuning import (
 
 __all__ = [
     "METHOD_NAMES",
+    "Adaptation",
     "Calibration",
     "CollisionMonitor",
     "FaultSpan",

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._validation import FloatArray
+from ..detection import TIME_TOLERANCE
 from ..friction import Coulomb, CoulombViscous, HystereticError, Sigmoid, Stribeck, Viscous
 from ..friction.static import FrictionModel
 from ..signals import Event
@@ -47,6 +48,8 @@ def unsupported(monitor: CollisionMonitor) -> str:
     """Why the compiled stream cannot run ``monitor`` ("" when it can)."""
     kind, threshold, n_dof = monitor.settings.kind, monitor.threshold, monitor.robot.n_dof
     friction = getattr(monitor._observer, "friction_model", None)
+    if monitor.adaptation is not None:
+        return "drift adaptation runs on the Python path only"
     if kind not in ("motor", "joint"):
         return f"the {kind!r} observer runs on the Python path only"
     if type(threshold) not in _FAMILIES:
@@ -89,11 +92,13 @@ class FusedStream:
         const[:, kernel.POLE], const[:, kernel.WEIGHT] = observer._pole, observer._weight
         const[:, kernel.FRICTION_PARAMETERS : kernel.MONITORED] = parameters
         const[np.asarray(detector.monitored_joints) - 1, kernel.MONITORED] = 1.0
-        release = math.nan if policy.release is None else policy.release
+        release = math.nan if policy.release is None else policy.release - TIME_TOLERANCE
         const_at = kernel.HEADER + 8 * sos.shape[0] + edges.size
         header = [
-            dt, policy.early * dt, policy.gap * dt, monitor.settle, release,
-            detector.min_duration, detector.hold, observer.torque == "joint", friction, family,
+            # durations compared up to the Detector's tolerance on time differences
+            dt, policy.early * dt, policy.gap * dt, monitor.settle - TIME_TOLERANCE, release,
+            detector.min_duration - TIME_TOLERANCE, detector.hold - TIME_TOLERANCE,
+            observer.torque == "joint", friction, family,
             extra, sos.shape[0], edges.size, const_at, const_at + const.size,
         ]  # fmt: skip
         parts = [np.array(header, dtype=np.float64), sos, zi_unit, edges, const, table]

@@ -10,6 +10,7 @@ time along axis 0, arrays of shape ``(n_samples, n_dof)``.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -18,6 +19,7 @@ import numpy as np
 import pandas as pd
 
 from .._validation import FloatArray
+from ..detection import TIME_TOLERANCE
 from ..exceptions import InputValueError
 from ..io import Log
 from ..signals import Event, ObserverSignals
@@ -94,6 +96,8 @@ def run_log(monitor: CollisionMonitor, log: Log, *, strict: bool) -> MonitorRun:
     measured = None if kind == "acceleration" or log.qd is None else np.asarray(log.qd)
     if monitor._fused is not None:
         return _run_fused(monitor, monitor._fused, log, measured, strict=strict)
+    if monitor.adaptation is not None:
+        return _run_stepwise(monitor, log, measured, strict=strict)
     n_samples, n_dof = q.shape
     bad = monitor.limits.bad_rows(q, measured, tau)
     reasons: dict[int, str] = {}  # refused inside a segment, by sample index
@@ -208,6 +212,55 @@ def _run_fused(
     )
 
 
+def _run_stepwise(
+    monitor: CollisionMonitor, log: Log, measured: FloatArray | None, *, strict: bool
+) -> MonitorRun:
+    """:func:`run_log` for a monitor that learns as it goes (drift adaptation).
+
+    What it learns depends on its own verdicts, so the log runs through
+    :meth:`CollisionMonitor.step` sample by sample, on a copy of the monitor
+    (the live stream's state is left alone).
+    """
+    stream = copy.copy(monitor)
+    stream.reset()
+    stream._record = []
+    t, q = np.asarray(log.t), np.asarray(log.q)
+    sensed = monitor.settings.kind == "joint"
+    tau_j = np.asarray(log.tau_j) if sensed else None
+    tau_m = np.asarray(log.tau_m if log.tau_m is not None else log.tau_j)
+    events: list[Event] = []
+    bad = np.zeros(t.size, dtype=bool)
+    settling = np.zeros(t.size, dtype=bool)
+    messages: dict[int, str] = {}
+    for k in range(t.size):
+        verdict = stream.step(
+            t[k],
+            q[k],
+            tau_m[k],
+            None if tau_j is None else tau_j[k],
+            qd=None if measured is None else measured[k],
+        )
+        if verdict.status == "fault":
+            if strict:
+                raise InputValueError(
+                    f"sample {k} (t = {t[k]:.6g} s) is a fault: {verdict.message}"
+                )
+            bad[k], messages[k] = True, verdict.message
+        settling[k] = verdict.status == "settling"
+        if verdict.event is not None:
+            events.append(verdict.event)
+    last = stream.finish()
+    events += [] if last is None else [last]
+    out = {name: np.full(q.shape, np.nan) for name in _SERIES}
+    rows = np.searchsorted(t, [time for time, _, _ in stream._record])
+    for k, (_, sample, velocity) in zip(rows, stream._record, strict=True):
+        for name in ("residual", "model_torque", "friction", "sign"):
+            out[name][k] = getattr(sample, name)
+        out["velocity"][k] = velocity
+    faults = _spans(t, bad, messages.__getitem__)
+    return _result(monitor, log, out, measured is not None, (events, faults, settling))
+
+
 def _fused_reason(
     monitor: CollisionMonitor,
     reason: str,
@@ -285,7 +338,9 @@ def _segment(
         values = acceleration if name == "acceleration" else getattr(signals, name)
         if values is not None:
             out[name][block] = values
-    settled = int(np.searchsorted(t[block] - t[start], monitor.settle, side="left"))
+    settled = int(
+        np.searchsorted(t[block] - t[start], monitor.settle - TIME_TOLERANCE, side="left")
+    )
     settling[start : start + settled] = True
     if settled < stop - start:
         part = _rows(signals, slice(settled, None), acceleration)

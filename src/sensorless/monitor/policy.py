@@ -23,6 +23,10 @@ Fault semantics (modelled on a robot controller's reflex and error states):
 * A **collision** verdict latches: it stays until :meth:`reset` or, with
   ``release`` set, until every monitored residual has been inside its bounds
   for ``release`` seconds.
+* Durations (``settle``, ``release``, and the detector's ``min_duration`` and
+  ``hold``) are compared up to :data:`~sensorless.detection.TIME_TOLERANCE`
+  (1 ns), so a whole number of sample periods equal to one of them counts as
+  equal at every sample rate despite the rounding of time stamps.
 """
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validation import FloatArray, as_sample, check_dt
-from ..detection import Detector, DetectorState, Verdict
+from ..detection import TIME_TOLERANCE, Detector, DetectorState, Verdict
 from ..exceptions import (
     DimensionError,
     InputTypeError,
@@ -31,9 +31,11 @@ from ..exceptions import (
 )
 from ..io import Log
 from ..observers import AccelerationObserver, MomentumObserver, ObserverSample, ObserverState
+from ..observers.adaptive import AdapterState
 from ..robots.model import RobotModel
 from ..signals import Event, ObserverSignals
 from ..thresholds import ModelBasedThreshold, Threshold, ThresholdInputs
+from .adaptation import Adaptation
 from .batch import BOUNDS_FAULT, OBSERVER_FAULT, MonitorRun, run_log
 from .policy import StreamPolicy
 from .tuning import ObserverSettings
@@ -63,6 +65,8 @@ class _Stream:
     estimator: Any  # section states (position, velocity, acceleration) of the estimator
     observer: ObserverState | None  # None for the acceleration-based estimate
     detector: DetectorState | None  # None while settling
+    adapter: AdapterState | None = None  # drift adaptation, if any
+    quiet_from: float = -math.inf  # the adapter may learn from this time on [s]
 
 
 class CollisionMonitor:
@@ -92,6 +96,9 @@ class CollisionMonitor:
         velocity-based threshold; ``"python"`` the reference path of numpy
         calls; ``"auto"`` numba where it can run. Both give the same verdicts,
         and residuals and bounds within rounding.
+    adaptation : Adaptation, optional
+        Adapt the nominal friction and offsets to drift (momentum observers;
+        Python path): see :mod:`sensorless.monitor.adaptation`.
 
     Raises
     ------
@@ -120,6 +127,7 @@ class CollisionMonitor:
         hold: float = 0.05,
         policy: StreamPolicy | None = None,
         backend: str = "auto",
+        adaptation: Adaptation | None = None,
     ) -> None:
         if not isinstance(robot, RobotModel):
             raise InputTypeError(f"robot must be a RobotModel; got {type(robot).__name__}")
@@ -174,6 +182,19 @@ class CollisionMonitor:
         self._early = self.policy.early * self.dt
         self._gap = self.policy.gap * self.dt
         self._n_dof, self._joint = robot.n_dof, settings.kind == "joint"
+        if adaptation is not None and not isinstance(adaptation, Adaptation):
+            raise InputTypeError(
+                f"adaptation must be an Adaptation; got {type(adaptation).__name__}"
+            )
+        if adaptation is not None and settings.kind == "acceleration":
+            raise InputValueError(
+                "drift adaptation corrects a momentum observer's residual; "
+                "the acceleration observer has none"
+            )
+        self.adaptation = adaptation
+        self._adapter = None if adaptation is None else adaptation.adapter(self._observer)
+        self._guard = 0.0 if adaptation is None else float(adaptation.guard)
+        self._record: list[tuple[float, ObserverSample, FloatArray]] | None = None
         self._fused = self._fused_stream(backend)
         self.reset()
 
@@ -422,8 +443,11 @@ class CollisionMonitor:
                     q[None], np.zeros((1, q.size)) if measured is None else measured[None]
                 )
             )
-            stream = _Stream(time, time, estimator, observer, None)
+            # What the drift adapter learned survives the restart; its filters start anew.
+            learned = None if stream is None else stream.adapter
+            stream = _Stream(time, time, estimator, observer, None, self._adapter_start(learned))
         assert stream is not None  # set above on a restart
+        adapter = stream.adapter
         (_, velocity, acceleration), estimator = self._estimator._step_outputs(
             q, stream.estimator, self._outputs
         )
@@ -442,6 +466,7 @@ class CollisionMonitor:
                 # The first velocity estimate comes with the second sample: the observer
                 # starts there, so a stream that begins in motion has no start-up excursion.
                 observer = self._observer._initial_state_checked(q[None], velocity[None])
+                adapter = self._adapter_start(adapter)
             sample, observer = self._observer._step_checked(observer, q, velocity, tau)
             outputs = observer.filtered
         if not np.isfinite(outputs).all() or (
@@ -450,7 +475,10 @@ class CollisionMonitor:
             self._pending = time
             return self._fault(time, OBSERVER_FAULT)
         residual, model_torque, friction, sign = sample
-        settling = time - stream.start < self.settle
+        settling = time - stream.start < self.settle - TIME_TOLERANCE
+        if self._adapter is not None and adapter is not None:
+            trusted = not settling and not self._latched and time >= stream.quiet_from
+            residual, adapter = self._adapter.step(adapter, residual, velocity, trusted)
         detector = stream.detector
         if settling:
             nan = np.full(self.robot.n_dof, np.nan)
@@ -478,10 +506,23 @@ class CollisionMonitor:
         stream.estimator = estimator
         stream.observer = observer
         stream.detector = detector
+        stream.adapter = adapter
+        if verdict.joints or verdict.status == "collision":
+            stream.quiet_from = time + self._guard
+        if self._record is not None:
+            self._record.append((time, sample._replace(residual=residual), velocity))
         self._stream = stream
         self._floor = time
         self._pending = -math.inf
         return verdict
+
+    def _adapter_start(self, learned: AdapterState | None) -> AdapterState | None:
+        """The drift adapter's state at a (re)start: filters from zero, θ and P kept."""
+        if self._adapter is None:
+            return None
+        if learned is None:
+            return self._adapter.initial_state()
+        return self._adapter.restart(learned)
 
     def _latch(self, verdict: Verdict) -> Verdict:
         """Apply the latch: a collision stays a collision until released."""
@@ -497,7 +538,7 @@ class CollisionMonitor:
                 self._inside_since = math.nan
             elif math.isnan(self._inside_since):
                 self._inside_since = verdict.t
-            if verdict.t - self._inside_since >= release:
+            if verdict.t - self._inside_since >= release - TIME_TOLERANCE:
                 self._latched = False
                 self._inside_since = math.nan
                 return verdict

@@ -6,7 +6,10 @@ elasticity); its state lives in a :class:`PlantState` passed in and returned.
 external torque held constant (zero-order hold), using fixed-step RK4
 substeps. Stiff friction (LuGre) is split off: its bristle state is advanced
 with the exact solution of its own equation after each substep, and held
-during the RK4 stages. Units SI, radians; joint vectors have shape (n_dof,).
+during the RK4 stages. Friction that drifts with time
+(:class:`~sensorless.friction.drift.DriftingFriction`) is evaluated at the
+state's time ``t``, held over the period (it changes over minutes). Units SI,
+radians; joint vectors have shape (n_dof,).
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ from numpy.typing import ArrayLike
 from .._validation import FloatArray, check_dt
 from ..exceptions import DimensionError, InputValueError, ModelError
 from ..friction import FrictionModel, LuGre
+from ..friction.drift import DriftingFriction
 from ..robots.model import RobotModel
 
 __all__ = [
@@ -34,7 +38,7 @@ __all__ = [
     "friction_torque",
 ]
 
-Friction = FrictionModel | LuGre | None
+Friction = FrictionModel | LuGre | DriftingFriction | None
 _ROBOT_FRICTION: Any = "robot"
 
 
@@ -53,6 +57,8 @@ class PlantState:
         (flexible joints only).
     z_motor : ndarray of shape (n_dof,) or None
         Bristle deflection of a LuGre motor-side friction [rad].
+    t : float
+        Time since the start of the run [s] (the clock of drifting friction).
     """
 
     q: FloatArray
@@ -61,12 +67,17 @@ class PlantState:
     theta: FloatArray | None = None
     thetad: FloatArray | None = None
     z_motor: FloatArray | None = None
+    t: float = 0.0
 
 
-def friction_torque(friction: Friction, qd: FloatArray, z: FloatArray | None) -> FloatArray:
-    """Friction torque [N m] of any friction model at velocity ``qd`` (no checks)."""
+def friction_torque(
+    friction: Friction, qd: FloatArray, z: FloatArray | None, t: float = 0.0
+) -> FloatArray:
+    """Friction torque [N m] of a friction model at velocity ``qd``, time ``t`` [s]; no checks."""
     if friction is None:
         return np.zeros_like(qd)
+    if isinstance(friction, DriftingFriction):
+        return friction.evaluate_at(t, qd)
     if isinstance(friction, LuGre):
         assert z is not None  # state invariant: LuGre plants always carry z
         return friction.output(qd, z)
@@ -99,6 +110,8 @@ def _friction_rates(friction: Friction, inertia: FloatArray) -> list[float]:
     """Stiffness-like rates [1/s] of a friction model acting on joint inertias [kg m²]."""
     if friction is None:
         return [0.0]
+    if isinstance(friction, DriftingFriction):
+        friction = friction.base  # warm-up only lowers friction: the cold joint is the stiffest
     if isinstance(friction, LuGre):
         damping = (friction.sigma1 + friction.sigma2) / inertia
         return [float(np.max(damping)), float(np.max(np.sqrt(friction.sigma0 / inertia)))]
@@ -165,7 +178,7 @@ class RigidPlant:
 
     def joint_friction(self, state: PlantState) -> FloatArray:
         """True friction torque τ_fr [N m] at ``state``."""
-        return friction_torque(self.friction, state.qd, state.z)
+        return friction_torque(self.friction, state.qd, state.z, state.t)
 
     def elastic_torque(self, state: PlantState) -> None:
         """Rigid joints have no joint-torque sensor reading."""
@@ -176,6 +189,8 @@ class RigidPlant:
     ) -> PlantState:
         """Integrate one period ``dt`` [s] with τ_m and τ_c [N m] held."""
         model, data, friction = self.robot.pinocchio_model, self._data, self.friction
+        if isinstance(friction, DriftingFriction):
+            friction = friction.at(state.t)  # held over the period
         drive = tau_m + tau_c
         h = dt / substeps
         q, qd, z = state.q, state.qd, state.z
@@ -196,7 +211,7 @@ class RigidPlant:
             qd_new = qd + (h / 6.0) * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
             z = _advance_bristles(friction, z, 0.5 * (qd + qd_new), h)
             q, qd = q_new, qd_new
-        return PlantState(q, qd, z)
+        return PlantState(q, qd, z, t=state.t + dt)
 
 
 @dataclass(frozen=True)
@@ -307,7 +322,7 @@ class FlexiblePlant:
 
     def joint_friction(self, state: PlantState) -> FloatArray:
         """Link-side friction τ_frL [N m] at ``state``."""
-        return friction_torque(self.link_friction, state.qd, state.z)
+        return friction_torque(self.link_friction, state.qd, state.z, state.t)
 
     def elastic_torque(self, state: PlantState) -> FloatArray:
         """Elastic joint torque τ_J = K (θ − q) [N m] read by the torque sensors."""
@@ -329,7 +344,7 @@ class FlexiblePlant:
         fb = self.feedback
         h = dt / substeps
         x = np.concatenate([state.q, state.qd, state.theta, state.thetad])
-        z, z_motor = state.z, state.z_motor
+        z, z_motor, t = state.z, state.z_motor, state.t
         link_friction, motor_friction = self.link_friction, self.motor_friction
 
         def derivative(
@@ -344,8 +359,8 @@ class FlexiblePlant:
                 motor = (
                     ratio * tau_m + (1 - ratio) * tau_j + (d - ratio * fb.damping) * (thetad - qd)
                 )
-            link_tau = tau_l - friction_torque(link_friction, qd, z) + tau_c
-            motor_acc = (motor - friction_torque(motor_friction, thetad, z_motor) - tau_l) / b
+            link_tau = tau_l - friction_torque(link_friction, qd, z, t) + tau_c
+            motor_acc = (motor - friction_torque(motor_friction, thetad, z_motor, t) - tau_l) / b
             return np.concatenate([qd, pin.aba(model, data, q, qd, link_tau), thetad, motor_acc])
 
         for _ in range(substeps):
@@ -355,7 +370,7 @@ class FlexiblePlant:
                 motor_friction, z_motor, 0.5 * (x[3 * n :] + x_new[3 * n :]), h
             )
             x = x_new
-        return PlantState(x[:n], x[n : 2 * n], z, x[2 * n : 3 * n], x[3 * n :], z_motor)
+        return PlantState(x[:n], x[n : 2 * n], z, x[2 * n : 3 * n], x[3 * n :], z_motor, t + dt)
 
 
 def _initial(q0: ArrayLike, qd0: ArrayLike | None, n_dof: int) -> tuple[FloatArray, FloatArray]:

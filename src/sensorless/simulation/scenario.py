@@ -3,8 +3,9 @@
 A scenario names the true and the nominal robot, how they differ (model
 error), the controller, the trajectory, the sensors, the contacts, the
 duration and the seed. Shipped scenarios live in ``sensorless/data/scenarios``;
-any other YAML file with the same keys works too (see the shipped files for
-the schema, which :func:`load_scenario` validates).
+any other YAML file with the same keys works too: :mod:`sensorless.simulation.schema`
+declares the format (and exports its JSON Schema), :func:`load_scenario` checks a
+file against it before building anything.
 
 Seeds: ``model_error.seed`` fixes the nominal model, so every run of a
 scenario shares one robot and one model error (the situation of a user who
@@ -25,12 +26,14 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-import yaml
 
+from .._validation import check_scalar
 from .._version import __version__
 from ..exceptions import InputValueError, ModelError, UnknownNameError
-from ..friction import Coulomb, CoulombViscous, LuGre
+from ..friction import Coulomb, CoulombViscous, FrictionModel, LuGre
+from ..friction.drift import DriftingFriction
 from ..io import write_log
+from ..io.file_schema import read_yaml_mapping
 from ..robots import load as load_robot
 from ..robots.model import RobotModel
 from ..trajectories import QuinticViaPoints, RandomPointToPoint, Trajectory, VelocitySweep
@@ -38,16 +41,11 @@ from .collisions import Contact, ContactSet, HalfSine, Push, Recorded
 from .controllers import ComputedTorque, JointPID
 from .model_error import perturb, perturb_friction
 from .plants import FlexiblePlant, Friction, RigidPlant, TorqueFeedback
+from .schema import validate_scenario
 from .sensors import SensorModel
 from .simulator import SimulationResult, simulate
 
 __all__ = ["Scenario", "available_scenarios", "generate", "load_scenario", "lugre_from"]
-
-_KEYS = {
-    "name", "description", "duration", "dt", "seed", "robot", "nominal_robot", "model_error",
-    "true_friction",
-    "plant", "controller", "trajectory", "sensors", "collisions", "random_collisions",
-}  # fmt: skip
 
 
 def _scenario_dir() -> Path:
@@ -124,10 +122,25 @@ class Scenario:
             spec["random_collisions"]["count"] = max(1, round(count * seconds / self.duration))
         return Scenario(self.name, spec)
 
+    def with_sample_rate(self, rate: float) -> Scenario:
+        """The same scenario controlled, sampled and logged at ``rate`` [Hz] (key ``dt`` = 1/rate).
+
+        The plant is still integrated with RK4 substeps fine enough for
+        stability (:func:`simulate`); robots, trajectory, contacts, sensors and
+        seeds are unchanged.
+        """
+        spec = copy.deepcopy(self.spec)
+        spec["dt"] = 1.0 / check_scalar(rate, "rate", "Hz")
+        return Scenario(self.name, spec)
+
     def robots(self) -> tuple[RobotModel, RobotModel]:
         """The true robot (with its true friction) and the nominal model the user has."""
         true = load_robot(self.spec["robot"])
         nominal = load_robot(self.spec.get("nominal_robot", self.spec["robot"]))
+        if "nominal_friction" in self.spec:  # set by with_exact_model
+            friction = _friction(self.spec["nominal_friction"], nominal)
+            parameters = nominal.parameter_vector()
+            nominal = nominal.with_standard_parameters(parameters, friction=friction)
         true_friction = _friction(self.spec.get("true_friction", "robot"), true)
         true = true.with_standard_parameters(true.parameter_vector(), friction=true_friction)
         error = self.spec.get("model_error")
@@ -219,9 +232,57 @@ class Scenario:
         """Simulate the scenario with a run seed (default: the scenario's)."""
         return simulate(**self.build(seed, collisions), progress=progress)
 
+    def with_exact_model(self) -> Scenario:
+        """The oracle: the same scenario with the nominal model equal to the true one.
+
+        The spec is transformed, no behaviour is added: ``nominal_robot`` becomes
+        ``robot``, ``model_error`` is dropped and a ``true_friction`` other than
+        the robot's own is copied to ``nominal_friction``. So :meth:`robots`
+        gives a nominal model with the true inertial parameters and the true
+        friction, and :meth:`nominal` gives, on a flexible plant, the models of
+        every observer kind without model error (the link friction of the
+        plant for ``kind="joint"``, the apparent motor inertia for
+        ``kind="motor"``). What no rigid-body model holds stays unmodelled:
+        joint elasticity seen by the motor-torque observer, the presliding
+        state of LuGre friction (observers use its steady state), a drifting
+        friction.
+
+        The true robot, plant, trajectory, sensors, contacts and seeds are
+        unchanged; the controller, though, is built on the nominal model, so a
+        computed-torque or compensating controller makes slightly different
+        runs. To judge the *same* runs with the exact model, observe the logs
+        of this scenario with ``with_exact_model().nominal(kind)`` (what
+        :mod:`sensorless.benchmark` does).
+
+        Returns
+        -------
+        Scenario
+            Same name, transformed spec.
+        """
+        spec = copy.deepcopy(self.spec)
+        spec["nominal_robot"] = spec["robot"]
+        spec.pop("model_error", None)
+        spec.pop("nominal_friction", None)
+        true_friction = spec.get("true_friction", "robot")
+        if true_friction != "robot":
+            spec["nominal_friction"] = copy.deepcopy(true_friction)
+        return Scenario(self.name, spec)
+
 
 def load_scenario(name_or_path: str | Path) -> Scenario:
-    """Load a shipped scenario by name, or a scenario YAML file by path."""
+    """Load a shipped scenario by name, or a scenario YAML file by path.
+
+    The file is checked against the declared format
+    (:class:`~sensorless.simulation.schema.ScenarioFile`) before anything is built.
+
+    Raises
+    ------
+    UnknownNameError
+        A name that is not a shipped scenario.
+    FileFormatError
+        The file is not YAML text or does not follow the scenario format; the
+        message names the file and lists every problem with its field path.
+    """
     path = Path(name_or_path)
     if not path.suffix:
         path = _scenario_dir() / f"{name_or_path}.yaml"
@@ -232,19 +293,9 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
             )
     if not path.is_file():
         raise ModelError(f"scenario file not found: {path}")
-    with path.open(encoding="utf-8") as handle:
-        spec = yaml.safe_load(handle)
-    if not isinstance(spec, Mapping):
-        raise ModelError(f"scenario {path} must be a YAML mapping; got {type(spec).__name__}")
-    unknown = set(spec) - _KEYS
-    if unknown:
-        raise ModelError(
-            f"scenario {path}: unknown keys {sorted(unknown)}; valid keys: {sorted(_KEYS)}"
-        )
-    missing = {"duration", "robot", "controller", "trajectory"} - set(spec)
-    if missing:
-        raise ModelError(f"scenario {path}: missing keys {sorted(missing)}")
-    return Scenario(str(spec.get("name", path.stem)), copy.deepcopy(dict(spec)))
+    spec = read_yaml_mapping(path, "scenario")
+    validate_scenario(spec, f"scenario file {path}")
+    return Scenario(str(spec.get("name", path.stem)), spec)
 
 
 def generate(
@@ -279,7 +330,7 @@ def generate(
 
 
 # ---------------------------------------------------------------- spec readers
-def _friction(spec: Any, robot: RobotModel) -> Friction:
+def _friction(spec: Any, robot: RobotModel) -> FrictionModel | LuGre | None:
     if spec == "robot":
         return robot.friction
     if spec in (None, "none"):
@@ -299,10 +350,31 @@ def _friction(spec: Any, robot: RobotModel) -> Friction:
     raise ModelError(f"unknown friction type {kind!r}; options: robot, none, lugre, coulomb")
 
 
+def _drift(spec: Mapping[str, Any], base: Friction) -> DriftingFriction:
+    """The plant's ``friction_drift`` mapping: warm-up and offset drift of the true friction."""
+    if not isinstance(base, FrictionModel):
+        raise ModelError(
+            "friction_drift needs a stateless true friction (Coulomb, viscous, Stribeck, "
+            f"sigmoid); got {base!r}"
+        )
+    options = dict(spec)
+    if "offset_periods" in options:
+        options["offset_periods"] = tuple(options["offset_periods"])
+    known = {"warmup", "warmup_viscous", "time_constant", "offset_rate", "offset_periods", "seed"}
+    unknown = set(options) - known
+    if unknown:
+        raise ModelError(f"friction_drift: unknown keys {sorted(unknown)}; valid: {sorted(known)}")
+    return DriftingFriction(base, **options)
+
+
 def _plant(spec: Mapping[str, Any], robot: RobotModel) -> RigidPlant | FlexiblePlant:
     kind = spec.get("type", "rigid")
     if kind == "rigid":
+        if spec.get("friction_drift") is not None:
+            return RigidPlant(robot, friction=_drift(spec["friction_drift"], robot.friction))
         return RigidPlant(robot)
+    if spec.get("friction_drift") is not None:
+        raise ModelError("friction_drift is supported on rigid plants only")
     if kind == "flexible":
         feedback = spec.get("feedback")
         return FlexiblePlant(

@@ -683,3 +683,18 @@ def test_log_shares_read_only_arrays() -> None:
     frozen.setflags(write=False)  # read-only view of a writable array: still copied
     copied = Log(t=log.t, q=frozen)
     assert not np.shares_memory(copied.q, view)
+
+
+def test_a_file_with_time_in_milliseconds_is_refused(tmp_path) -> None:
+    """A log file sampled at 1 kHz but stamped in ms reads as 1 s steps: refused, with the fix."""
+    t = np.arange(200) * 1.0  # ms
+    frame = pd.DataFrame({"t": t, "q_1": np.sin(t / 100.0), "q_2": np.cos(t / 100.0)})
+    frame.to_csv(tmp_path / "ms.csv", index=False)
+    with pytest.raises(
+        LogFormatError,
+        match=r"looks like milliseconds.*median step is 1 s.*/ *1000|divide t by 1000",
+    ):
+        read_log(tmp_path / "ms.csv")
+    frame["t"] = t / 1000.0
+    frame.to_csv(tmp_path / "s.csv", index=False)
+    assert read_log(tmp_path / "s.csv").dt == pytest.approx(1e-3)

@@ -29,6 +29,7 @@ into chunks with the state carried over gives the same result as in one go.
 
 from __future__ import annotations
 
+from .drift import DriftingFriction
 from .lugre import LuGre
 from .static import (
     Coulomb,
@@ -43,6 +44,7 @@ from .static import (
 __all__ = [
     "Coulomb",
     "CoulombViscous",
+    "DriftingFriction",
     "FrictionModel",
     "HystereticError",
     "LuGre",

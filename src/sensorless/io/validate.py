@@ -154,6 +154,10 @@ def as_float_column(name: str, values: ArrayLike) -> FloatArray:
     return out
 
 
+MAX_PERIOD = 0.5
+"""Longest median sample period of a log [s]: longer is time in milliseconds (2 Hz at most)."""
+
+
 def _check_time(t: FloatArray, check_regular: bool, rtol: float) -> None:
     step = np.diff(t)
     not_increasing = np.flatnonzero(step <= 0.0)
@@ -168,6 +172,13 @@ def _check_time(t: FloatArray, check_regular: bool, rtol: float) -> None:
     if not check_regular:
         return
     median = float(np.median(step))
+    if median > MAX_PERIOD:
+        raise LogFormatError(
+            f"column 't' looks like milliseconds, but time must be seconds: the median step "
+            f"is {median:.6g} s, longer than {MAX_PERIOD:g} s (a robot log is sampled at "
+            "100 Hz-1 kHz); divide t by 1000, or import with the column-mapping importer and "
+            "declare the time unit (`unit: ms` in its spec)"
+        )
     # Time stamps far from zero (e.g. Unix time) carry rounding of their own spacing; a
     # few ulps of the largest stamp are not jitter.
     tolerance = rtol * median + 4.0 * float(np.spacing(max(abs(t[0]), abs(t[-1]))))
@@ -243,7 +254,9 @@ def validate_table(
     LogFormatError
         Unknown, missing or duplicate columns; joint groups of different
         lengths; fewer than 2 samples; a non-numeric, NaN or infinite value;
-        time not strictly increasing or (with ``check_regular``) irregular;
+        time not strictly increasing, or (with ``check_regular``, as files are
+        read) with a median step beyond ``MAX_PERIOD`` (0.5 s: milliseconds) or
+        irregular;
         angles beyond ±4π rad (degrees); a negative or fractional
         ``collision_id``. The message names the column and the first bad row.
     DimensionError

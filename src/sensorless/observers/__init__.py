@@ -53,6 +53,7 @@ from __future__ import annotations
 
 from ._common import OBSERVER_KINDS, TORQUE_KINDS, VELOCITY_SOURCES, ObserverSample
 from .acceleration import AccelerationObserver
+from .adaptive import AdapterState, FrictionAdapter
 from .momentum import MomentumObserver, ObserverState
 from .observe import default_estimator, observe
 
@@ -61,6 +62,8 @@ __all__ = [
     "TORQUE_KINDS",
     "VELOCITY_SOURCES",
     "AccelerationObserver",
+    "AdapterState",
+    "FrictionAdapter",
     "MomentumObserver",
     "ObserverSample",
     "ObserverState",

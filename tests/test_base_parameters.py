@@ -305,5 +305,5 @@ def test_unknown_zero_parameter() -> None:
 
 
 def test_bad_sample_count() -> None:
-    with pytest.raises(InputValueError, match="n_samples must be positive; got 0"):
+    with pytest.raises(InputValueError, match="n_samples must be an integer >= 11; got 0"):
         sl.base_parameters(sl.robots.load("planar2"), n_samples=0)

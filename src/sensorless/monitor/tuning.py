@@ -181,7 +181,7 @@ def tune(
 
     Parameters
     ----------
-    logs : sequence of Log
+    logs : Log or sequence of Log
         Collision-free runs of the robot.
     robot : RobotModel
         The nominal model the observer uses.
@@ -226,6 +226,10 @@ def tune(
         raise UnknownNameError(
             f"unknown threshold method {method!r}; options: {sorted(METHOD_NAMES)}"
         )
+    if isinstance(logs, Log):
+        logs = [logs]  # one run
+    if not isinstance(logs, Sequence) or not all(isinstance(log, Log) for log in logs):
+        raise InputTypeError(f"logs must be a Log or a sequence of Logs; got {type(logs).__name__}")
     if not logs:
         raise InputValueError("tune needs at least one collision-free log")
     if false_alarm_rate is not None and ("margin" in options or folds is None):

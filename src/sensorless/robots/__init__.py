@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from ..exceptions import UnknownNameError
+from ..exceptions import InputTypeError, UnknownNameError
 from .builtin import BUILTIN
 from .model import PARAMETER_NAMES, LinkInertia, MotorData, RobotModel
 
@@ -34,6 +34,8 @@ def load(name: str, **options: Any) -> RobotModel:
     **options
         Passed to the robot's builder (e.g. ``planar2`` accepts link lengths).
     """
+    if not isinstance(name, str):
+        raise InputTypeError(f"robot name must be a string, one of {available()}; got {name!r}")
     builder: Callable[..., RobotModel] | None = BUILTIN.get(name)
     if builder is None:
         raise UnknownNameError(f"unknown robot {name!r}; available robots: {available()}")

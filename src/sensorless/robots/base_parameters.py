@@ -23,8 +23,8 @@ import pandas as pd
 import scipy.linalg
 from numpy.typing import ArrayLike
 
-from .._validation import FloatArray
-from ..exceptions import InputValueError, UnknownNameError
+from .._validation import FloatArray, check_int, check_scalar
+from ..exceptions import InputTypeError, UnknownNameError
 from .model import N_LINK_PARAMETERS, PARAMETER_NAMES, RobotModel
 
 __all__ = ["BaseParameters", "base_parameters"]
@@ -145,6 +145,8 @@ def base_parameters(
     BaseParameters
     """
     names = robot.parameter_names()
+    if isinstance(zero, str) or not isinstance(zero, Iterable):
+        raise InputTypeError(f"zero must be a sequence of parameter names; got {zero!r}")
     zero = tuple(zero)
     unknown = [z for z in zero if z not in names]
     if unknown:
@@ -152,11 +154,13 @@ def base_parameters(
             f"unknown standard parameters {unknown}; names are {list(PARAMETER_NAMES)} "
             f"followed by the link number 1..{robot.n_dof}"
         )
-    n_samples = 100 if n_samples is None else n_samples
-    if n_samples < 1:
-        raise InputValueError(f"n_samples must be positive; got {n_samples}")
-    rng = np.random.default_rng(seed)
     n = robot.n_dof
+    # Every column needs rows: n_samples·n_dof >= 11·n_dof, so at least 11 random states.
+    n_samples = 100 if n_samples is None else check_int(n_samples, "n_samples", N_LINK_PARAMETERS)
+    seed = check_int(seed, "seed", 0)
+    if tolerance is not None:
+        tolerance = check_scalar(tolerance, "tolerance", "-")
+    rng = np.random.default_rng(seed)
     q = rng.uniform(-np.pi, np.pi, (n_samples, n))
     observation = robot.regressor(
         q, rng.standard_normal((n_samples, n)), rng.standard_normal((n_samples, n))

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, Literal, TypedDict
 
@@ -28,7 +28,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from .._validation import FloatArray, as_float_array
-from ..exceptions import DimensionError, InputValueError, ModelError
+from ..exceptions import DimensionError, InputTypeError, InputValueError, ModelError
 from .inertia import LinkInertia, MotorData
 
 __all__ = [
@@ -178,6 +178,11 @@ def _dh_rows(table: Any, kind: str) -> list[dict[str, float]]:
     """Read a DH table (DataFrame, sequence of mappings or of 4-sequences) into dicts."""
     if isinstance(table, pd.DataFrame):
         rows: list[Any] = table.to_dict("records")
+    elif isinstance(table, (str, bytes, Mapping)) or not isinstance(table, Iterable):
+        raise InputTypeError(
+            f"the {kind} DH table must be a DataFrame or a sequence of rows (mappings or "
+            f"4-sequences), one per joint; got {type(table).__name__}"
+        )
     else:
         rows = list(table)
     if not rows:

@@ -27,7 +27,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from .._validation import FloatArray, as_float_array, as_joint_array, check_finite
-from ..exceptions import DimensionError, ModelError
+from ..exceptions import DimensionError, InputValueError, ModelError
 from . import kinematics, regressors
 from .builders import (
     Convention,
@@ -342,6 +342,13 @@ class RobotModel:
         out = np.empty((arrays[0].shape[0], *shape))
         for k, sample in enumerate(zip(*arrays, strict=True)):
             out[k] = algorithm(model, data, *sample)
+        if not np.isfinite(out).all():
+            k = int(np.flatnonzero(~np.isfinite(out.reshape(out.shape[0], -1)).all(axis=1))[0])
+            raise InputValueError(
+                f"the result is not finite at sample {k}: the state "
+                f"({', '.join(label for _, label in states)}) is beyond what the model can "
+                "evaluate in floating point (values of 1e150 and more?)"
+            )
         return out[0] if single else out
 
     def link_id(self, link: int | str) -> int:

@@ -124,6 +124,11 @@ def check_runs(runs: list[ObserverSignals]) -> None:
     first = runs[0]
     for i, run in enumerate(runs):
         what = f"fit run {i}"
+        if run.t.shape[0] < 2:
+            raise InputValueError(
+                f"{what} has {run.t.shape[0]} sample(s); a fit needs at least 2 per run "
+                "(they define its sample period)"
+            )
         if run.n_dof != first.n_dof or run.robot != first.robot:
             raise robot_mismatch(
                 f"all fit runs must come from one robot; run 0 is {first.robot!r} "

@@ -86,3 +86,17 @@ def test_tune_takes_one_log_as_one_run() -> None:
     one, _ = tune(log, nominal, "constant", margin=0.05, folds=None)
     listed, _ = tune([log], nominal, "constant", margin=0.05, folds=None)
     np.testing.assert_array_equal(one.beta_, listed.beta_)
+
+
+def test_tune_refuses_a_log_in_degrees() -> None:
+    from sensorless.simulation.scenario import load_scenario
+
+    scenario = load_scenario("panda-gaz").with_duration(1.0)
+    log = scenario.run(seed=1, collisions=False).log
+    frame = log.to_pandas()
+    # Joint 1 near 0.15 rad, given in degrees: 8.6 "rad", under the log's 4π check but
+    # beyond twice the joint's range (±2.9 rad) from its centre.
+    frame["q_1"] = np.rad2deg(0.15 + 0.01 * np.sin(frame["t"]))
+    degrees = type(log).from_pandas(frame)
+    with pytest.raises(InputValueError, match=r"log 0: q of joint \d is .* degrees instead of"):
+        tune([degrees], scenario.robots()[1], "constant", margin=0.05, folds=None)

@@ -45,6 +45,7 @@ from .calibration import (
     margin_for_rate,
     with_stated,
 )
+from .policy import StreamPolicy
 
 __all__ = [
     "METHOD_NAMES",
@@ -163,6 +164,31 @@ def make_threshold(method: str, robot: RobotModel, **options: Any) -> Threshold:
     raise UnknownNameError(f"unknown threshold method {method!r}; options: {sorted(METHOD_NAMES)}")
 
 
+def _check_angles(logs: Sequence[Log], robot: RobotModel) -> None:
+    """Refuse a log whose positions leave the robot's range by more than the range itself.
+
+    Such a log is in degrees (or of another robot): 90° reads as 90 rad. A
+    small overshoot of the limits (a simulated trajectory, a real arm at its
+    stop) passes; samples beyond the limits are the monitor's faults.
+    """
+    limits = StreamPolicy().limits(robot)
+    for i, log in enumerate(logs):
+        q = np.asarray(log.q)
+        if q.shape[1] != robot.n_dof:
+            return  # observe says so, with the joint counts
+        over = np.nanmax(np.abs(q - limits.centre), axis=0) - 2.0 * limits.half_range
+        if (over > 0.0).any():
+            j = int(np.argmax(over))
+            k = int(np.nanargmax(np.abs(q[:, j] - limits.centre[j])))
+            low = limits.centre[j] - limits.half_range[j]
+            high = limits.centre[j] + limits.half_range[j]
+            raise InputValueError(
+                f"log {i}: q of joint {j + 1} is {q[k, j]:.6g} at t = {log.t[k]:.6g} s, far "
+                f"outside the robot's range [{low:.4g}, {high:.4g}] rad: degrees instead of "
+                f"radians? Convert with numpy.deg2rad (robot {robot.name!r})"
+            )
+
+
 def tune(
     logs: Sequence[Log],
     robot: RobotModel,
@@ -243,6 +269,7 @@ def tune(
         raise InputValueError(
             f"method {method!r} watches the {needed!r} residual; observer kind is {settings.kind!r}"
         )
+    _check_angles(logs, robot)
     signals = [settings.observe(log, robot) for log in logs]
     options.setdefault("transient", settings.settle_time(signals[0].dt))
     detector: dict[str, Any] = {"folds": folds, "min_duration": min_duration, "hold": hold}

@@ -1,13 +1,23 @@
-"""The method comparison behind the demo, on a short scenario."""
+"""The method comparison behind the demo, on a short scenario, and its real-arm section."""
 
 from __future__ import annotations
 
+import math
+import re
+from pathlib import Path
+
 import numpy as np
 import pytest
+from typer.testing import CliRunner
 
-from sensorless.comparison import compare, write_comparison_report
+from sensorless.cli import app, demo
+from sensorless.comparison import REAL_ARM_HEADING, compare, real_arm, write_comparison_report
 from sensorless.exceptions import InputValueError
+from sensorless.monitor import poisson_interval
+from sensorless.realarm import DEFAULT_FAMILIES
 from sensorless.simulation.scenario import load_scenario
+
+UR10_DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "ur10-ext_observer"
 
 
 def test_compare_tunes_detects_and_reports(tmp_path) -> None:
@@ -86,3 +96,62 @@ def test_compare_rejects_bad_options() -> None:
         compare(scenario, residuals=("torque",))
     with pytest.raises(InputValueError, match="workers must be a positive integer"):
         compare(scenario, workers=0)
+
+
+@pytest.mark.skipif(
+    not UR10_DATA.is_dir(), reason=f"the real UR10 recordings are absent (expected in {UR10_DATA})"
+)
+def test_real_arm_section_reports_held_out_false_alarms_of_three_families(tmp_path) -> None:
+    section = real_arm(UR10_DATA)
+    assert section.evaluation is not None and section.skipped == ""
+    assert section.seconds > 0
+    table = section.summary()
+    assert table is not None and list(table.index) == list(DEFAULT_FAMILIES)
+    for family, row in table.iterrows():
+        seconds, alarms = float(row["held-out [s]"]), int(row["false alarms"])
+        assert seconds > 50.0, family  # both folds' held-out recordings
+        rate = float(row["per hour"])
+        assert math.isfinite(rate) and rate == pytest.approx(alarms * 3600.0 / seconds)
+        low, high = poisson_interval(alarms, seconds / 3600.0)
+        assert (row["95 % low"], row["95 % high"]) == pytest.approx((low, high))
+        assert low <= rate <= high
+    html = write_comparison_report([], tmp_path / "report.html", real_arm=section).read_text()
+    body = html[html.index(f"<h2>{REAL_ARM_HEADING}</h2>") :]
+    rows = re.findall(r"<th>([a-z-]+)</th>\s*<td>", body)
+    assert rows == list(DEFAULT_FAMILIES)
+    assert "data:image/png;base64," in body and "link4.csv second half" in body
+
+
+def test_real_arm_section_is_skipped_with_the_reason_without_recordings(tmp_path) -> None:
+    absent = real_arm(tmp_path / "nowhere")
+    assert absent.evaluation is None and absent.summary() is None
+    assert "is not a folder" in absent.skipped and "--real-data" in absent.skipped
+    empty = real_arm(tmp_path)  # a folder, but without the four files
+    assert "lacks ['link4.csv', 'ur-static.csv', 'no_torque.csv', '3times.csv']" in empty.skipped
+    html = write_comparison_report([], tmp_path / "report.html", real_arm=absent).read_text()
+    body = html[html.index(f"<h2>{REAL_ARM_HEADING}</h2>") :]
+    assert "<p>Skipped: " in body and "nowhere is not a folder" in body
+    assert "<table" not in body and "<img" not in body
+
+
+@pytest.mark.parametrize("present", [True, False])
+def test_demo_ends_with_the_real_arm_section(tmp_path, monkeypatch, present) -> None:
+    if present and not UR10_DATA.is_dir():
+        pytest.skip(f"the real UR10 recordings are absent (expected in {UR10_DATA})")
+    # The simulated scenarios take minutes: left out, the demo is its real-arm part alone.
+    monkeypatch.setattr(demo, "DEMO_SCENARIOS", {})
+    folder = UR10_DATA if present else tmp_path / "absent"
+    out = tmp_path / "demo"
+    result = CliRunner().invoke(app, ["demo", "-o", str(out), "--real-data", str(folder)])
+    assert result.exit_code == 0, result.output
+    html = (out / "report.html").read_text()
+    body = html[html.index(f"<h2>{REAL_ARM_HEADING}</h2>") :]
+    if present:
+        assert "held-out false alarms, both folds pooled" in result.output
+        assert "held-out [s]" in result.output  # the unit is no markup tag
+        for family in DEFAULT_FAMILIES:
+            assert re.search(rf"\n{family} +\d", result.output), family
+        assert "<table" in body and "<img" in body
+    else:
+        assert "Real arm (UR10): skipped." in " ".join(result.output.split())
+        assert "<p>Skipped: " in body and "<table" not in body

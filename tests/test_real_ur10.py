@@ -1,8 +1,8 @@
-"""The real-arm recipe of ``examples/ur10_real_arm.py`` on the real UR10 recordings.
+"""The real-arm recipe (``sensorless.realarm``, ``examples/ur10_real_arm.py``) on the real UR10.
 
 The recordings (``../shared/data/ur10-ext_observer``, see its README) are not
 part of the repository; without them every test here is skipped. The tests run
-the example's own steps: import with the shipped spec (units checked against
+the recipe's steps: import with the shipped spec (units checked against
 the physics: the measured q̇ is the derivative of q in rad/s, torques are
 within the UR10's ratings), the friction and offset identified on one half of
 ``link4.csv`` (it must predict the other half better than the bare URDF), the
@@ -32,7 +32,20 @@ import numpy as np
 import pytest
 
 import sensorless as sl
+from sensorless.exceptions import InputTypeError
+from sensorless.identification import identify_correction
+from sensorless.identification.correction import model_error
 from sensorless.identification.logs import savgol_derivatives
+from sensorless.plots import plot_held_out
+from sensorless.realarm import (
+    DEFAULT_FAMILIES,
+    RealArmEvaluation,
+    Recording,
+    evaluate_folds,
+    load_ur10,
+    standing_residual,
+    ur10_folds,
+)
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "ur10-ext_observer"
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "ur10_real_arm.py"
@@ -56,13 +69,18 @@ def example() -> ModuleType:
 
 
 @pytest.fixture(scope="module")
-def recordings(example: ModuleType) -> dict:
-    return example.load_recordings(DATA)
+def recordings() -> dict[str, Recording]:
+    return load_ur10(DATA)
 
 
 @pytest.fixture(scope="module")
 def robot() -> sl.RobotModel:
     return sl.robots.load("ur10")
+
+
+@pytest.fixture(scope="module")
+def evaluation(recordings: dict, robot: sl.RobotModel) -> RealArmEvaluation:
+    return evaluate_folds(ur10_folds(recordings), robot)
 
 
 def test_import_gives_the_four_files_in_si_units(recordings: dict) -> None:
@@ -100,29 +118,29 @@ def test_measured_velocity_is_the_derivative_of_the_position(recordings: dict) -
 
 
 def test_friction_and_offset_predict_the_held_out_half_better(
-    example: ModuleType, recordings: dict, robot: sl.RobotModel
+    recordings: dict, robot: sl.RobotModel
 ) -> None:
-    for train, _, held_out in example.split(recordings):
-        correction = example.identify_correction(train.clean_pieces(), robot)
+    for fold in ur10_folds(recordings):
+        (train,), held_out = fold.identification, fold.held_out
+        assert train.name.startswith("link4.csv") and held_out[0].name.startswith("link4.csv")
+        correction = identify_correction(train.clean_pieces(), robot)
         friction = correction.friction
         assert (friction.c_pos >= 0).all() and (friction.c_neg <= 0).all()
         assert (friction.fv >= 0).all()
         # Joint 6 never moves in link4.csv: no friction is invented for it.
         assert friction.c_pos[5] == friction.c_neg[5] == friction.fv[5] == 0.0
         test = [correction.apply(log) for log in held_out[0].clean_pieces()]
-        error, velocity = example.model_error(test, robot)
+        error, velocity, _ = model_error(test, robot)
         corrected = error - correction.model(robot).friction_torque(velocity)
-        bare, _ = example.model_error(held_out[0].clean_pieces(), robot)
+        bare, _, _ = model_error(held_out[0].clean_pieces(), robot)
         rms_corrected = np.sqrt(np.mean(corrected**2, axis=0))
         rms_bare = np.sqrt(np.mean(bare**2, axis=0))
         assert (rms_corrected[:3] < 0.8 * rms_bare[:3]).all(), (rms_corrected, rms_bare)
 
 
-def test_standing_arm_residual_stays_bounded(
-    example: ModuleType, recordings: dict, robot: sl.RobotModel
-) -> None:
-    correction = example.identify_correction(recordings["link4.csv"].clean_pieces(), robot)
-    peaks = example.standing_residual(recordings, robot, correction)
+def test_standing_arm_residual_stays_bounded(recordings: dict, robot: sl.RobotModel) -> None:
+    correction = identify_correction(recordings["link4.csv"].clean_pieces(), robot)
+    peaks = standing_residual(recordings, robot, correction)
     assert np.isfinite(peaks.to_numpy()).all()
     whole = peaks.loc["corrected, whole file"].to_numpy()
     between = peaks.loc["corrected, between contacts"].to_numpy()
@@ -132,25 +150,58 @@ def test_standing_arm_residual_stays_bounded(
 
 
 def test_cross_validation_reports_a_finite_false_alarm_rate_per_family(
-    example: ModuleType, recordings: dict, robot: sl.RobotModel
+    evaluation: RealArmEvaluation, robot: sl.RobotModel
 ) -> None:
-    reports = example.cross_validate(recordings, robot)
-    assert [report.fold for report in reports] == [1, 2]
-    for report in reports:
-        held_out = {result.name for result in report.results}
+    assert [fold.fold for fold in evaluation.folds] == [1, 2]
+    for fold in evaluation.folds:
+        held_out = {run.name for run in fold.held_out}
         assert len(held_out) == 5 and any(name.startswith("link4.csv") for name in held_out)
-    table = example.summary(reports, robot.n_dof)
-    assert list(table.index) == list(example.FAMILIES)
+        for run in fold.held_out:
+            assert run.signals.residual.shape == (run.log.n_samples, robot.n_dof)
+            for lower, upper in run.bounds.values():
+                assert lower.shape == upper.shape == run.signals.residual.shape
+    table = evaluation.summary()
+    assert list(table.index) == list(DEFAULT_FAMILIES)
     for family, row in table.iterrows():
         # Both link4 halves (~17 s), twice 15 s standing, twice 5.4 s of no_torque.csv, ...
         assert row["held-out [s]"] > 50.0, family
         alarms, rate = int(row["false alarms"]), float(row["per hour"])
         assert alarms >= 0 and math.isfinite(rate), family
-        assert rate == pytest.approx(alarms / (row["held-out [s]"] / 3600.0), rel=0.01, abs=1)
-        low, high = (float(v) for v in row["95 % interval"].split("-"))
-        assert low <= rate <= high, family
+        assert rate == pytest.approx(alarms / (row["held-out [s]"] / 3600.0))
+        assert row["95 % low"] <= rate <= row["95 % high"], family
         bands = row[[f"band {j}" for j in range(1, robot.n_dof + 1)]].to_numpy(dtype=float)
         assert (np.isfinite(bands) & (bands > 0)).all(), family
+    # The rounded table for a person says the same.
+    readable = evaluation.summary(readable=True)
+    for family, row in readable.iterrows():
+        low, high = (float(v) for v in row["95 % interval"].split("-"))
+        assert low == pytest.approx(table.loc[family, "95 % low"], abs=0.5)
+        assert high == pytest.approx(table.loc[family, "95 % high"], abs=0.5)
+        assert row["per hour"] == pytest.approx(table.loc[family, "per hour"], abs=0.5)
+        assert len(row["tune expects [1/h]"].split(" / ")) == 2
+    # The per-recording table adds up to the pooled one.
+    details = evaluation.details()
+    for family in DEFAULT_FAMILIES:
+        counts = details[family].str.extract(r"(\d+) \((\d+)\)").astype(int)
+        assert counts[0].sum() == table.loc[family, "false alarms"]
+        assert counts[1].sum() == table.loc[family, "at contacts"]
+
+
+def test_a_held_out_run_plots_its_residual_against_every_family(
+    evaluation: RealArmEvaluation,
+) -> None:
+    run = evaluation.held_out(1, "ur-static.csv rest")
+    figure = plot_held_out(run, joints=(1, 2))
+    assert len(figure.axes) == 2
+    first = figure.axes[0]
+    np.testing.assert_array_equal(first.lines[0].get_ydata(), run.signals.residual[:, 0])
+    assert len(first.lines) == 1 + 2 * len(DEFAULT_FAMILIES)  # r̂, then upper and lower each
+    assert len(first.patches) == len(run.log.metadata["collisions"]) == 3  # apparent contacts
+    assert "fold 1: ur-static.csv rest" in figure.get_suptitle()
+    with pytest.raises(InputTypeError, match="run must be a HeldOutRun"):
+        plot_held_out(run.signals)  # type: ignore[arg-type]
+    with pytest.raises(KeyError, match="no held-out run"):
+        evaluation.held_out(3, "link4.csv")
 
 
 def test_the_script_runs_end_to_end_and_writes_its_plots(
@@ -159,7 +210,7 @@ def test_the_script_runs_end_to_end_and_writes_its_plots(
     assert example.main(["--data", str(DATA), "--output", str(tmp_path)]) == 0
     printed = capsys.readouterr().out
     assert "Held-out false alarms, both folds pooled" in printed
-    for family in example.FAMILIES:
+    for family in DEFAULT_FAMILIES:
         assert f"\n{family} " in printed
     plots = sorted(path.name for path in tmp_path.glob("*.png"))
     assert len(plots) == 10 and "fold1_link4_second_half.png" in plots

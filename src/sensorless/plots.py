@@ -12,6 +12,9 @@ in N m, joints are numbered from 1.
 * :func:`plot_tau_c` — ground-truth external torque τ_c against the residual.
 * :func:`plot_evaluation` — timeline of windows, detections and false alarms
   of one or more :class:`~sensorless.evaluation.Evaluation` objects.
+* :func:`plot_held_out` — a held-out real recording of
+  :func:`sensorless.realarm.evaluate_folds`: its residual against every
+  family's bounds, apparent contacts shaded.
 """
 
 from __future__ import annotations
@@ -24,14 +27,15 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
 
-from ._validation import FloatArray
+from ._validation import FloatArray, check_type
 from .evaluation import Evaluation, Window, collision_windows
 from .evaluation.scoring import check_evaluations
 from .exceptions import DimensionError, InputTypeError, InputValueError
 from .io import Log
+from .realarm import HeldOutRun
 from .signals import Event, ObserverSignals
 
-__all__ = ["plot_evaluation", "plot_residuals", "plot_tau_c"]
+__all__ = ["plot_evaluation", "plot_held_out", "plot_residuals", "plot_tau_c"]
 
 WINDOW_COLOR = "tab:red"
 WINDOW_ALPHA = 0.15
@@ -407,3 +411,45 @@ def plot_evaluation(
     if title is not None:
         figure.suptitle(title)
     return figure
+
+
+def plot_held_out(
+    run: HeldOutRun,
+    *,
+    joints: Sequence[int] | None = None,
+    title: str | None = None,
+    figsize: tuple[float, float] | None = None,
+) -> Figure:
+    """The residual of a held-out real recording against every family's bounds.
+
+    :func:`plot_residuals` of the run's residual r̂ [N m], the bounds and
+    events of every family, and its apparent contacts shaded as collision
+    windows.
+
+    Parameters
+    ----------
+    run : HeldOutRun
+        A held-out recording of :func:`sensorless.realarm.evaluate_folds`.
+    joints : sequence of int, optional
+        1-based joints to plot; default all.
+    title : str, optional
+        Figure title; default names the fold and the recording.
+    figsize : (float, float), optional
+        Figure size [in].
+
+    Returns
+    -------
+    Figure
+    """
+    checked = check_type(run, HeldOutRun, "run")
+    return plot_residuals(
+        checked.signals,
+        checked.bounds,
+        checked.log,
+        checked.events,
+        joints=joints,
+        title=f"fold {checked.fold}: {checked.name} (shaded: apparent contacts)"
+        if title is None
+        else title,
+        figsize=figsize,
+    )

@@ -13,6 +13,7 @@ from typing import Annotated
 import typer
 
 from ._common import settings, user_errors
+from .benchmark import benchmark_command
 from .demo import demo_command
 from .identify import excite_command, identify_friction_command, identify_inertial_command
 from .importing import import_command
@@ -53,6 +54,7 @@ COMMANDS: dict[str, Callable[..., None]] = {
     "detect": detect_command,
     "evaluate": evaluate_command,
     "demo": demo_command,
+    "benchmark": benchmark_command,
     "excite": excite_command,
     "import": import_command,
 }

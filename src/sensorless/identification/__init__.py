@@ -11,9 +11,13 @@
 - Excitation trajectories (Swevers et al. 1997): :func:`optimize_excitation`.
 - Physically consistent classical parameters from base parameters:
   :func:`consistent_parameters`.
+- What a rigid-body model lacks on a real arm, joint by joint from its error
+  on logs: a motor-torque offset and asymmetric Coulomb + viscous friction,
+  :func:`identify_correction` → :class:`NominalCorrection`.
 """
 
 from .consistent import ConsistentFit, consistent_parameters
+from .correction import NominalCorrection, identify_correction
 from .excitation import ExcitationResult, load_excitation, optimize_excitation
 from .friction import (
     FrictionFit,
@@ -47,6 +51,7 @@ __all__ = [
     "ExcitationResult",
     "FrictionFit",
     "FrictionIdentification",
+    "NominalCorrection",
     "RegressionAccumulator",
     "RegressionResult",
     "RelativeWeightSignificance",
@@ -58,6 +63,7 @@ __all__ = [
     "fit_lugre_dynamic",
     "fit_stribeck",
     "identify_base_parameters",
+    "identify_correction",
     "identify_friction",
     "identify_from_logs",
     "identify_from_matrices",

@@ -182,6 +182,7 @@ CASES = [
     (["detect", "{missing}", "--thresholds", "{thresholds}"], 3, "does not exist"),
     (["detect", "{log}", "--thresholds", "{missing}"], 3, "No such file"),
     (["tune", "--method", "constant", "{missing}"], 3, "does not exist"),
+    (["simulate", "{missing}.yaml", "-o", "{folder}/run.parquet"], 3, "scenario file not found"),
     (["detect", "{log}", "--thresholds", "{corrupt}"], 4, "is not valid YAML"),
     (["detect", "{log}", "--thresholds", "{log}"], 4, "not a YAML threshold file"),
     (["simulate", "{scenario}", "-o", "{folder}"], 2, "is a folder"),

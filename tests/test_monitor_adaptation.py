@@ -1,4 +1,4 @@
-"""The monitor with drift adaptation: the stream rules hold, batch = stream, and drift is learned."""
+"""The monitor with drift adaptation: the stream rules hold, and batch equals stream."""
 
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ def _drifted(log, rate, joint=2):
 
 
 def test_batch_equals_stream_and_a_fault_changes_nothing(panda) -> None:
-    free, test, nominal, (threshold, settings) = panda
+    _, test, nominal, (threshold, settings) = panda
     log = _drifted(test, 0.2)
     adaptation = Adaptation(rate_limit=0.5, max_correction=10.0, guard=0.5)
     monitor = CollisionMonitor(nominal, threshold, settings, adaptation=adaptation)

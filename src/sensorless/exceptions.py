@@ -16,6 +16,7 @@ __all__ = [
     "InputTypeError",
     "InputValueError",
     "LogFormatError",
+    "MissingFileError",
     "ModelError",
     "ModelMismatchError",
     "NotFittedError",
@@ -67,6 +68,10 @@ class NotFittedError(SensorlessError, ValueError):
 
 class FileFormatError(SensorlessError, ValueError):
     """A file (log, thresholds, scenario) cannot be read as what it should be."""
+
+
+class MissingFileError(SensorlessError, FileNotFoundError):
+    """A file the library was asked to read does not exist."""
 
 
 class LogFormatError(FileFormatError):

@@ -29,7 +29,7 @@ import pandas as pd
 
 from .._validation import check_scalar
 from .._version import __version__
-from ..exceptions import InputValueError, ModelError, UnknownNameError
+from ..exceptions import InputValueError, MissingFileError, ModelError, UnknownNameError
 from ..friction import Coulomb, CoulombViscous, FrictionModel, LuGre
 from ..friction.drift import DriftingFriction
 from ..io import write_log
@@ -292,7 +292,7 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
                 "(or give the path of a YAML file)"
             )
     if not path.is_file():
-        raise ModelError(f"scenario file not found: {path}")
+        raise MissingFileError(f"scenario file not found: {path}")
     spec = read_yaml_mapping(path, "scenario")
     validate_scenario(spec, f"scenario file {path}")
     return Scenario(str(spec.get("name", path.stem)), spec)

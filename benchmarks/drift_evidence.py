@@ -8,7 +8,8 @@ ramped over 2 s) and fast impacts (40 N, 0.15 s). Outside the monitor:
 
 1. momentum observer (K_I = 20, the demo's settings) on the nominal model;
 2. *fixed*: a constant threshold (eq. 5.32) fitted on the first 300 s with the
-   demo's margin (10 % of β), detecting on the rest;
+   demo's margin (10 % of β), detecting on the rest; *fixed tv*: the
+   time-variant threshold (eq. 5.34) fitted the same way (margin 10 % of α);
 3. *adaptive*: a :class:`~sensorless.observers.adaptive.FrictionAdapter`
    after the observer; on the first 300 s (collision-free by the user's
    declaration, as every tuning run) it learns from every settled sample and
@@ -49,7 +50,7 @@ from sensorless.observers import MomentumObserver
 from sensorless.observers.adaptive import AdapterState, FrictionAdapter
 from sensorless.signals import Event, ObserverSignals
 from sensorless.simulation.scenario import load_scenario
-from sensorless.thresholds import ConstantThreshold
+from sensorless.thresholds import ConstantThreshold, TimeVariantThreshold
 
 TUNING = 300.0  # s of collision-free motion at the start
 JOINTS = (1, 2, 3)
@@ -87,7 +88,7 @@ def fitted(signals: ObserverSignals) -> ConstantThreshold:
 
 def score(
     name: str,
-    threshold: ConstantThreshold,
+    threshold: ConstantThreshold | TimeVariantThreshold,
     signals: ObserverSignals,
     log: Log,
     events: list[Event] | None = None,
@@ -174,6 +175,11 @@ def main() -> None:
 
     fixed = fitted(tuning)
     score("fixed", fixed, test, test_log)
+    # The time-variant family (eq. 5.34) on the same data, without adaptation: its bounds
+    # move with the nominal friction and model torque.
+    first = TimeVariantThreshold(joints=JOINTS).fit(tuning)
+    varying = TimeVariantThreshold(margin=MARGIN * first.alpha_, joints=JOINTS).fit(tuning)
+    score("fixed tv", varying, test, test_log)
 
     # Bound of δτ: half the nominal friction at 2 rad/s, per joint.
     friction = nominal.friction

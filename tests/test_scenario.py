@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import yaml
 
-from sensorless.exceptions import FileFormatError, ModelError, UnknownNameError
+from sensorless.exceptions import FileFormatError, MissingFileError, ModelError, UnknownNameError
 from sensorless.io import read_log
 from sensorless.simulation.plants import RigidPlant
 from sensorless.simulation.scenario import (
@@ -61,7 +61,7 @@ def test_model_error_is_fixed_by_its_own_seed_not_the_run_seed() -> None:
 def test_unknown_and_malformed_scenarios_give_clear_errors(tmp_path) -> None:
     with pytest.raises(UnknownNameError, match="puma560-thesis"):
         load_scenario("no-such-scenario")
-    with pytest.raises(ModelError, match="not found"):
+    with pytest.raises(MissingFileError, match="scenario file not found"):
         load_scenario(tmp_path / "missing.yaml")
     spec = copy.deepcopy(load_scenario("panda-gaz").spec)
     spec["colisions"] = []

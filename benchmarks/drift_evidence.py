@@ -215,8 +215,9 @@ def main() -> None:
         settings,
         min_duration=MIN_DURATION,
         hold=HOLD,
-        # The scenario's wrist passes its position limit by 0.5 mrad every 5 s (the via
-        # points of puma560-thesis); a wider margin keeps those samples judged, as above.
+        # Joint 4 follows thesis Table 5.1 to 180°, past the PUMA's 170° limit plus the
+        # default 0.1 rad margin, for 0.37 s every 5 s; a wider margin keeps those samples
+        # judged, as in the variants above.
         policy=StreamPolicy(release=args.guard, position_margin=0.2),
         adaptation=adaptation,
     )

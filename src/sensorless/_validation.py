@@ -123,8 +123,17 @@ def check_type(value: Any, kind: type[T], name: str, hint: str = "") -> T:
     ``hint`` follows the expected type in the message, e.g. where to get one.
     """
     if not isinstance(value, kind):
-        raise InputTypeError(f"{name} must be a {kind.__name__}{hint}; got {type(value).__name__}")
+        article = "an" if kind.__name__[:1] in "AEIOU" else "a"
+        raise InputTypeError(
+            f"{name} must be {article} {kind.__name__}{hint}; got {type(value).__name__}"
+        )
     return value
+
+
+def check_state_joints(state_n_dof: int, n_dof: int, owner: str) -> None:
+    """:class:`DimensionError` unless a state for ``state_n_dof`` joints fits ``owner``."""
+    if state_n_dof != n_dof:
+        raise DimensionError(f"state is for {state_n_dof} joints; {owner} has {n_dof}")
 
 
 def _sign_ok(values: FloatArray, sign: Sign) -> bool:

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._validation import FloatArray, check_dt, check_duration
+from .._validation import FloatArray, check_dt, check_duration, check_type
 from ..exceptions import InputTypeError, InputValueError
 from ..signals import Event, ObserverSignals
 from ..thresholds.base import Threshold
@@ -256,11 +256,7 @@ class Detector:
         DimensionError
             An input of the wrong shape (a programming error, not a data fault).
         """
-        if not isinstance(state, DetectorState):
-            raise InputTypeError(
-                f"state must be a DetectorState from initial_state or step; "
-                f"got {type(state).__name__}"
-            )
+        check_type(state, DetectorState, "state", " from initial_state or step")
         n_dof = self.threshold.n_dof_
         # Non-finite values are data faults, reported in the verdict; shapes are errors.
         r = as_samples(residual, n_dof, "residual", one_sample="step", allow_nonfinite=True)[0]

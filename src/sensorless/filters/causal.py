@@ -15,8 +15,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import signal
 
-from .._validation import FloatArray, as_joint_array, check_dt, check_int
-from ..exceptions import DimensionError, InputTypeError, InputValueError
+from .._validation import FloatArray, as_joint_array, check_dt, check_int, check_type
+from ..exceptions import DimensionError, InputValueError
 from ._derivatives import Derivatives, n_dof_of
 from ._sos import DIFFERENCE, IDENTITY, NO_SECTIONS, dc_group_delay, sections, sos_sample
 
@@ -294,11 +294,7 @@ class CausalEstimator:
         return self._run(arr, state)
 
     def _check_state(self, state: Any) -> FilterState:
-        if not isinstance(state, FilterState):
-            raise InputTypeError(
-                f"state must be a FilterState from initial_state, step or filter; "
-                f"got {type(state).__name__}"
-            )
+        check_type(state, FilterState, "state", " from initial_state, step or filter")
         for name, sos in zip(("position", "velocity", "acceleration"), self._sos, strict=True):
             zi = getattr(state, name)
             if zi.shape[0] != sos.shape[0]:

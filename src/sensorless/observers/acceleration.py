@@ -11,8 +11,8 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._validation import FloatArray
-from ..exceptions import DimensionError, InputTypeError
+from .._validation import FloatArray, check_state_joints, check_type
+from ..exceptions import InputTypeError
 from ..filters import CausalEstimator, FilterState
 from ..robots.model import RobotModel
 from ..signals import ObserverSignals
@@ -111,15 +111,8 @@ class AccelerationObserver(_NominalObserver):
         return self.estimator.initial_state(self._first_sample(q0, "q0")[0])
 
     def _check_state(self, state: Any) -> FilterState:
-        if not isinstance(state, FilterState):
-            raise InputTypeError(
-                "state must be a FilterState from initial_state, step or run; "
-                f"got {type(state).__name__}"
-            )
-        if state.n_dof != self.n_dof:
-            raise DimensionError(
-                f"state is for {state.n_dof} joints; the observer's robot has {self.n_dof}"
-            )
+        check_type(state, FilterState, "state", " from initial_state, step or run")
+        check_state_joints(state.n_dof, self.n_dof, "the observer's robot")
         return state
 
     def step(

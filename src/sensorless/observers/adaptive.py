@@ -67,10 +67,11 @@ from .._validation import (
     check_dt,
     check_int,
     check_scalar,
+    check_state_joints,
     check_type,
     per_joint,
 )
-from ..exceptions import DimensionError, InputTypeError, InputValueError
+from ..exceptions import DimensionError, InputValueError
 from ._adaptive_state import (
     AdapterState,
     BoolArray,
@@ -310,15 +311,8 @@ class FrictionAdapter:
         return delta[0] if single else delta
 
     def _check_state(self, state: Any) -> AdapterState:
-        if not isinstance(state, AdapterState):
-            raise InputTypeError(
-                "state must be an AdapterState from initial_state, step or run; "
-                f"got {type(state).__name__}"
-            )
-        if state.n_dof != self._n_dof:
-            raise DimensionError(
-                f"state is for {state.n_dof} joints; the adapter has {self._n_dof}"
-            )
+        check_type(state, AdapterState, "state", " from initial_state, step or run")
+        check_state_joints(state.n_dof, self._n_dof, "the adapter")
         return state
 
     # ------------------------------------------------------------ stream and batch

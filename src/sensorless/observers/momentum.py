@@ -12,8 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import signal
 
-from .._validation import FloatArray, check_dt
-from ..exceptions import DimensionError, InputTypeError
+from .._validation import FloatArray, check_dt, check_state_joints, check_type
 from ..robots.model import RobotModel
 from ..robots.recursion import MomentumTerms
 from ..signals import ObserverSignals
@@ -305,16 +304,8 @@ class MomentumObserver(_NominalObserver):
         return ObserverState(p, vg, fr, sgn, fr - vg, filtered)
 
     def _check_state(self, state: Any) -> ObserverState:
-        if not isinstance(state, ObserverState):
-            raise InputTypeError(
-                "state must be an ObserverState from initial_state, step or run; "
-                f"got {type(state).__name__}"
-            )
-        if state.momentum.shape != (self.n_dof,):
-            raise DimensionError(
-                f"state is for {state.momentum.shape[0]} joints; the observer's robot has "
-                f"{self.n_dof}"
-            )
+        check_type(state, ObserverState, "state", " from initial_state, step or run")
+        check_state_joints(state.momentum.shape[0], self.n_dof, "the observer's robot")
         return state
 
     def step(

@@ -21,6 +21,7 @@ from .._validation import (
     as_joint_array,
     check_finite,
     check_increasing,
+    check_type,
     first_irregular_step,
 )
 from ..exceptions import (
@@ -216,8 +217,4 @@ def check_inputs_finite(inputs: ThresholdInputs) -> None:
 
 def check_state(state: Any, expected: type[ThresholdState] = ThresholdState) -> None:
     """Raise :class:`~sensorless.exceptions.InputTypeError` unless ``state`` is an ``expected``."""
-    if not isinstance(state, expected):
-        raise InputTypeError(
-            f"state must be a {expected.__name__} from initial_state, step or process; "
-            f"got {type(state).__name__}"
-        )
+    check_type(state, expected, "state", " from initial_state, step or process")

@@ -62,6 +62,7 @@ import sensorless as sl
 from sensorless.io import Log
 from sensorless.monitor import CollisionMonitor, ObserverSettings, tune
 from sensorless.observers import MomentumObserver
+from sensorless.robots.builders import _prune_urdf
 from sensorless.robots.builtin import panda_urdf_path, ur_urdf_path
 from sensorless.robots.recursion import MomentumTerms, numba_available
 from sensorless.trajectories import RandomPointToPoint
@@ -190,23 +191,10 @@ def build(command: list[str]) -> float | None:
 
 # ---------------------------------------------------------------- samples
 def pruned_urdf(path: Path, tip: str) -> str:
-    """The URDF text of ``tip`` and its ancestors only (the arm cut at the flange)."""
+    """The URDF text of ``tip`` and its ancestors only (the arm cut at the flange, as the
+    library's builders cut it)."""
     root = ET.parse(path).getroot()
-    parent_of = {
-        str(j.find("child").get("link")): str(j.find("parent").get("link"))  # type: ignore[union-attr]
-        for j in root.findall("joint")
-    }
-    keep = {tip}
-    node = tip
-    while node in parent_of:
-        node = parent_of[node]
-        keep.add(node)
-    for link in root.findall("link"):
-        if link.get("name") not in keep:
-            root.remove(link)
-    for joint in root.findall("joint"):
-        if str(joint.find("child").get("link")) not in keep:  # type: ignore[union-attr]
-            root.remove(joint)
+    _prune_urdf(root, tip)
     return ET.tostring(root, encoding="unicode")
 
 

@@ -194,6 +194,7 @@ class CollisionMonitor:
         self.adaptation = adaptation
         self._adapter = None if adaptation is None else adaptation.adapter(self._observer)
         self._guard = 0.0 if adaptation is None else float(adaptation.guard)
+        self._trust = (np.zeros(self._n_dof, dtype=bool), np.ones(self._n_dof, dtype=bool))
         self._record: list[tuple[float, ObserverSample, FloatArray]] | None = None
         self._fused = self._fused_stream(backend)
         self.reset()
@@ -478,7 +479,9 @@ class CollisionMonitor:
         settling = time - stream.start < self.settle - TIME_TOLERANCE
         if self._adapter is not None and adapter is not None:
             trusted = not settling and not self._latched and time >= stream.quiet_from
-            residual, adapter = self._adapter.step(adapter, residual, velocity, trusted)
+            residual, adapter = self._adapter._step_checked(
+                adapter, residual, velocity, self._trust[int(trusted)]
+            )
         detector = stream.detector
         if settling:
             nan = np.full(self.robot.n_dof, np.nan)

@@ -340,9 +340,14 @@ class FrictionAdapter:
         """
         state = self._check_state(state)
         r_arr, qd_arr = self._sample(r_hat, "r_hat"), self._sample(qd, "qd")
-        mask = _trusted(trusted, (self._n_dof,))
+        return self._step_checked(state, r_arr, qd_arr, _trusted(trusted, (self._n_dof,)))
+
+    def _step_checked(
+        self, state: AdapterState, r_hat: FloatArray, qd: FloatArray, trusted: BoolArray
+    ) -> tuple[FloatArray, AdapterState]:
+        """:meth:`step` for arrays of shape (n_dof,) a caller has checked (the monitor)."""
         work = _Work(state)
-        out = self._advance(work, r_arr, qd_arr, mask)
+        out = self._advance(work, r_hat, qd, trusted)
         return out, work.freeze()
 
     def run(

@@ -26,6 +26,7 @@ from ..signals import Event, ObserverSignals
 
 if TYPE_CHECKING:
     from ._fused import FusedStream
+    from .policy import Limits
     from .stream import CollisionMonitor
 
 __all__ = ["FaultSpan", "MonitorRun"]
@@ -261,6 +262,22 @@ def _run_stepwise(
     return _result(monitor, log, out, measured is not None, (events, faults, settling))
 
 
+def value_fault(
+    limits: Limits, reason: str, sample: tuple[FloatArray, ...], velocity: FloatArray
+) -> str:
+    """The message of a value fault the kernel found: that of the Python path.
+
+    ``reason`` is one of the kernel's ``REASONS`` but the time rules; ``sample``
+    is (q, measured q̇ or empty, τ_m, τ_J) of the sample and ``velocity`` the
+    velocity it ran with [rad/s].
+    """
+    if reason in ("q", "tau_m", "tau_j"):
+        return limits.describe(reason, sample[("q", "", "tau_m", "tau_j").index(reason)])
+    if reason == "qd":
+        return limits.describe("qd", velocity)
+    return OBSERVER_FAULT if reason == "observer" else BOUNDS_FAULT
+
+
 def _fused_reason(
     monitor: CollisionMonitor,
     reason: str,
@@ -268,19 +285,11 @@ def _fused_reason(
     columns: tuple[FloatArray, ...],
     velocity: FloatArray,
 ) -> str:
-    """The message of the fault the kernel found at sample ``k``: that of the Python path."""
+    """The message of the fault the kernel found at sample ``k`` of a log."""
     t, q, qd, tau_m, tau_j = columns
-    if reason == "q":
-        return monitor.limits.describe("q", q[k])
-    if reason in ("tau_m", "tau_j"):
-        return monitor.limits.describe(reason, (tau_m if reason == "tau_m" else tau_j)[k])
-    if reason == "qd":
-        return monitor.limits.describe("qd", qd[k] if qd.shape[1] else velocity)
-    if reason == "observer":
-        return OBSERVER_FAULT
-    if reason == "bounds":
-        return BOUNDS_FAULT
-    return f"the time rule {reason!r} refused t = {t[k]:.9g} s (previous {t[k - 1]:.9g} s)"
+    if reason in ("time", "early", "gap"):
+        return f"the time rule {reason!r} refused t = {t[k]:.9g} s (previous {t[k - 1]:.9g} s)"
+    return value_fault(monitor.limits, reason, (q[k], qd[k], tau_m[k], tau_j[k]), velocity)
 
 
 def _segment(

@@ -36,7 +36,7 @@ from ..robots.model import RobotModel
 from ..signals import Event, ObserverSignals
 from ..thresholds import ModelBasedThreshold, Threshold, ThresholdInputs
 from .adaptation import Adaptation
-from .batch import BOUNDS_FAULT, OBSERVER_FAULT, MonitorRun, run_log
+from .batch import BOUNDS_FAULT, OBSERVER_FAULT, MonitorRun, run_log, value_fault
 from .policy import StreamPolicy
 from .tuning import ObserverSettings
 
@@ -377,17 +377,13 @@ class CollisionMonitor:
         self, fused: FusedStream, reason: str, time: float, sample: tuple[FloatArray, ...]
     ) -> str:
         """The message of a fault the compiled step found: that of the Python path."""
-        if reason in ("q", "tau_m", "tau_j"):
-            return self.limits.describe(reason, sample[("q", "", "tau_m", "tau_j").index(reason)])
-        if reason == "qd":
-            return self.limits.describe("qd", fused.velocity)
         if reason == "time":
             return self._back_message(time, fused.floor)
         if reason == "early":
             return self._early_message(time - fused.last)
         if reason == "gap":
             return self._gap_message(time - fused.last)
-        return OBSERVER_FAULT if reason == "observer" else BOUNDS_FAULT
+        return value_fault(self.limits, reason, sample, fused.velocity)
 
     def _sample(
         self, q: Any, qd: Any, tau_m: Any, tau_j: Any

@@ -6,6 +6,7 @@ array passed in and returned, as ``zi``/``zf`` in :func:`scipy.signal.lfilter`.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -86,6 +87,7 @@ class LuGre(JointParameters):
     delta: FloatArray = field(metadata=bound("> 0", "Stribeck exponent [-]"))
     _drop: FloatArray = field(init=False, repr=False, compare=False)
     _gaussian: bool = field(init=False, repr=False, compare=False)
+    _damping: FloatArray = field(init=False, repr=False, compare=False)
 
     def __init__(
         self,
@@ -104,6 +106,7 @@ class LuGre(JointParameters):
         # s(qd) several times per sample.
         object.__setattr__(self, "_drop", self.fs - self.fc)
         object.__setattr__(self, "_gaussian", bool(np.all(self.delta == 2.0)))
+        object.__setattr__(self, "_damping", self.sigma1 + self.sigma2)
 
     @classmethod
     def canudas1995(cls, n_dof: int = 1) -> LuGre:
@@ -169,11 +172,33 @@ class LuGre(JointParameters):
 
         No input checks: the inner-loop fast path of :meth:`step`.
         """
-        rate_dt = self._rate(qd) * dt
-        z_ss = np.sign(qd) * self._level(qd) / self.sigma0
-        # expm1 keeps z_ss * (1 - exp(-a dt)) -> qd dt accurate for small a dt.
-        z_new = z * np.exp(-rate_dt) - z_ss * np.expm1(-rate_dt)
+        z_new = self.advance_state(qd, dt, z)
         return self.output(qd, z_new), z_new
+
+    def advance_state(self, qd: FloatArray, dt: float, z: FloatArray) -> FloatArray:
+        """The bristle deflection [rad] of :meth:`advance` alone (no torque); no input checks."""
+        level = self._level(qd)
+        rate_dt = (self.sigma0 * dt) * np.abs(qd) / level
+        z_ss = np.sign(qd) * level / self.sigma0
+        # expm1 keeps z_ss * (1 - exp(-a dt)) -> qd dt accurate for small a dt.
+        return np.asarray(z * np.exp(-rate_dt) - z_ss * np.expm1(-rate_dt))
+
+    def held(self, z: FloatArray) -> Callable[[FloatArray], FloatArray]:
+        """Torque [N m] as a function of the velocity [rad/s] with ``z`` [rad] held.
+
+        Eq. (4.22b) rearranged as ``sigma0 z + (sigma1 + sigma2) qd − sigma1
+        sigma0 z |qd| / s(qd)`` with the ``z`` terms computed once: a
+        simulator evaluates it at every stage of a step where the bristles
+        are held. No input checks.
+        """
+        spring = self.sigma0 * z
+        coupling = self.sigma1 * spring
+        damping = self._damping
+
+        def torque(qd: FloatArray) -> FloatArray:
+            return np.asarray(damping * qd + spring - coupling * np.abs(qd) / self._level(qd))
+
+        return torque
 
     def _sample(self, x: ArrayLike, name: str) -> FloatArray:
         arr, single = as_joint_array(x, self.n_dof, name)

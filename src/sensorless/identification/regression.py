@@ -60,6 +60,8 @@ __all__ = [
 ]
 
 _FRICTION_OPTIONS = ("coulomb_viscous", None)
+#: Samples per call of the base regressor when a segment is filled (a few MB each).
+_REGRESSOR_BLOCK = 4096
 
 
 def _check_segment(segment: int) -> int:
@@ -75,14 +77,14 @@ def _segments(n_samples: int, segment: int) -> Iterator[slice]:
         yield slice(start, start + segment)
 
 
-def _friction_columns(qd: FloatArray) -> FloatArray:
-    m, n_dof = qd.shape
-    cols = np.zeros((m, n_dof, 3 * n_dof))
+def _fill_friction_columns(cols: FloatArray, qd: FloatArray) -> None:
+    """Write the c₊, c₋, f_v columns of ``qd`` into ``cols`` of shape (m, n_dof, 3 n_dof)."""
+    n_dof = qd.shape[1]
+    cols.fill(0.0)
     joints = np.arange(n_dof)
     cols[:, joints, joints] = qd > 0.0
     cols[:, joints, n_dof + joints] = qd < 0.0
     cols[:, joints, 2 * n_dof + joints] = qd
-    return cols
 
 
 def identify_base_parameters(
@@ -139,10 +141,19 @@ def identify_base_parameters(
         for kind in ("c_pos", "c_neg", "fv"):
             names += [f"{kind}{j + 1}" for j in range(n_dof)]
     acc = RegressionAccumulator(len(names))
+    n_base = len(base.names)
+    # One design buffer for every segment, filled in place, the regressor a
+    # block of samples at a time: the full regressor of a whole segment (all
+    # standard columns, then the base ones copied out, then the friction
+    # columns joined) was several hundred MB. The accumulator still sees one
+    # segment at a time, so the sums are those of the segment as a whole.
+    design = np.empty((min(segment, tau_arr.shape[0]), n_dof, len(names)))
     for part in _segments(tau_arr.shape[0], segment):
         q_s, qd_s, qdd_s = (a[part] for a in arrays)
-        blocks = base.regressor(q_s, qd_s, qdd_s)
+        rows = design[: q_s.shape[0]]
+        for block in _segments(q_s.shape[0], _REGRESSOR_BLOCK):
+            rows[block, :, :n_base] = base.regressor(q_s[block], qd_s[block], qdd_s[block])
         if friction is not None:
-            blocks = np.concatenate([blocks, _friction_columns(qd_s)], axis=2)
-        acc.add(blocks.reshape(-1, len(names)), tau_arr[part].reshape(-1))
+            _fill_friction_columns(rows[:, :, n_base:], qd_s)
+        acc.add(rows.reshape(-1, len(names)), tau_arr[part].reshape(-1))
     return base, acc.result(names)

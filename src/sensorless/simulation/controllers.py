@@ -126,7 +126,18 @@ class JointPID:
             Joint torque command [N m].
         state : ControllerState
         """
-        period = check_dt(dt)
+        return self._step_unchecked(state, q, q_desired, qd_desired, check_dt(dt), qdd_desired)
+
+    def _step_unchecked(
+        self,
+        state: ControllerState,
+        q: FloatArray,
+        q_desired: FloatArray,
+        qd_desired: FloatArray,
+        period: float,
+        qdd_desired: FloatArray | None = None,
+    ) -> tuple[FloatArray, ControllerState]:
+        """:meth:`step` with the period already checked (the simulator's inner loop)."""
         error = q_desired - q
         integral = state.integral + error * period
         velocity = (q - state.q_previous) / period
@@ -136,7 +147,7 @@ class JointPID:
         if self.friction_compensation and friction is not None:
             u = u + friction_torque(friction, qd_desired)
         limit = np.asarray(self.torque_limit)
-        return np.clip(u, -limit, limit), ControllerState(integral, q.copy())
+        return np.minimum(np.maximum(u, -limit), limit), ControllerState(integral, q.copy())
 
     def _feedback_torque(
         self, q: FloatArray, velocity: FloatArray, feedback: FloatArray, _: FloatArray | None

@@ -3,10 +3,14 @@
 A plant holds constants only (the *true* robot, its friction, joint
 elasticity); its state lives in a :class:`PlantState` passed in and returned.
 :meth:`advance` integrates one control period with the command and the
-external torque held constant (zero-order hold), using fixed-step RK4
-substeps. Stiff friction (LuGre) is split off: its bristle state is advanced
-with the exact solution of its own equation after each substep, and held
-during the RK4 stages. Friction that drifts with time
+external torque held constant (zero-order hold), using fixed-step
+substeps: classical RK4 for rigid joints; for flexible joints a linearly
+implicit step that treats the joint springs and the torque loop implicitly
+(:mod:`sensorless.simulation._stiff`), or RK4 as the reference
+(``integrator="rk4"``). Stiff friction (LuGre) is split off: its bristle
+state is advanced with the exact solution of its own equation after each
+substep, and held during the stages, where the friction is evaluated once
+per stage. Friction that drifts with time
 (:class:`~sensorless.friction.drift.DriftingFriction`) is evaluated at the
 state's time ``t``, held over the period (it changes over minutes). Units SI,
 radians; joint vectors have shape (n_dof,).
@@ -15,6 +19,7 @@ radians; joint vectors have shape (n_dof,).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import partial
 from typing import Any
@@ -28,6 +33,7 @@ from ..exceptions import DimensionError, InputValueError, ModelError
 from ..friction import FrictionModel, LuGre
 from ..friction.drift import DriftingFriction
 from ..robots.model import RobotModel
+from ._stiff import SpringLoop
 
 __all__ = [
     "FlexiblePlant",
@@ -40,6 +46,7 @@ __all__ = [
 
 Friction = FrictionModel | LuGre | DriftingFriction | None
 _ROBOT_FRICTION: Any = "robot"
+_INTEGRATORS = ("rosenbrock", "rk4")
 
 
 @dataclass(frozen=True)
@@ -84,12 +91,26 @@ def friction_torque(
     return friction.evaluate(qd)
 
 
+def _held_friction(
+    friction: Friction, z: FloatArray | None, t: float
+) -> Callable[[FloatArray], FloatArray] | None:
+    """Friction torque [N m] as a function of velocity [rad/s], bristles and time held."""
+    if friction is None:
+        return None
+    if isinstance(friction, DriftingFriction):
+        return friction.at(t).evaluate
+    if isinstance(friction, LuGre):
+        assert z is not None  # state invariant: LuGre plants always carry z
+        return friction.held(z)
+    return friction.evaluate
+
+
 def _advance_bristles(
     friction: Friction, z: FloatArray | None, qd_mid: FloatArray, h: float
 ) -> FloatArray | None:
     if isinstance(friction, LuGre):
         assert z is not None
-        return friction.advance(qd_mid, h, z)[1]
+        return friction.advance_state(qd_mid, h, z)
     return z
 
 
@@ -193,25 +214,28 @@ class RigidPlant:
             friction = friction.at(state.t)  # held over the period
         drive = tau_m + tau_c
         h = dt / substeps
-        q, qd, z = state.q, state.qd, state.z
-
-        def acceleration(q: FloatArray, qd: FloatArray) -> FloatArray:
-            return np.asarray(pin.aba(model, data, q, qd, drive - friction_torque(friction, qd, z)))
-
-        # Classical RK4 on (q, q̇), written out: this is the simulator's hot loop.
+        n = self.n_dof
+        # Classical RK4 on x = (q, q̇) stacked, one array operation per stage
+        # update: this is the simulator's hot loop.
+        x = np.concatenate((state.q, state.qd))
+        slope = np.empty((4, 2 * n))
+        stage = np.empty(2 * n)
+        z = state.z
         for _ in range(substeps):
-            a1 = acceleration(q, qd)
-            v2 = qd + 0.5 * h * a1
-            a2 = acceleration(q + 0.5 * h * qd, v2)
-            v3 = qd + 0.5 * h * a2
-            a3 = acceleration(q + 0.5 * h * v2, v3)
-            v4 = qd + h * a3
-            a4 = acceleration(q + h * v3, v4)
-            q_new = q + (h / 6.0) * (qd + 2.0 * v2 + 2.0 * v3 + v4)
-            qd_new = qd + (h / 6.0) * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-            z = _advance_bristles(friction, z, 0.5 * (qd + qd_new), h)
-            q, qd = q_new, qd_new
-        return PlantState(q, qd, z, t=state.t + dt)
+            resist = _held_friction(friction, z, state.t)
+            np.copyto(stage, x)
+            for i, weight in enumerate((0.5 * h, 0.5 * h, h, 0.0)):
+                qd = stage[n:]
+                force = drive if resist is None else drive - resist(qd)
+                slope[i, :n] = qd
+                slope[i, n:] = pin.aba(model, data, stage[:n], qd, force)
+                if weight:
+                    np.multiply(slope[i], weight, out=stage)
+                    stage += x
+            x_new = x + (h / 6.0) * (slope[0] + 2.0 * (slope[1] + slope[2]) + slope[3])
+            z = _advance_bristles(friction, z, 0.5 * (x[n:] + x_new[n:]), h)
+            x = x_new
+        return PlantState(x[:n], x[n:], z, t=state.t + dt)
 
 
 @dataclass(frozen=True)
@@ -255,6 +279,11 @@ class FlexiblePlant:
         Motor-side τ_fr (on θ̇) and link-side τ_frL (on q̇) friction.
     feedback : TorqueFeedback, optional
         Torque loop of eq. (2.2); the command u then replaces τ_m.
+    integrator : {"rosenbrock", "rk4"}, default "rosenbrock"
+        ``"rosenbrock"``: the springs and the torque loop implicit
+        (:mod:`sensorless.simulation._stiff`), so the substeps resolve the
+        joint oscillation only up to h ω ≤ π and faster modes are damped;
+        ``"rk4"``: classical RK4 with |λ h| ≤ 1 for every rate, the reference.
     """
 
     robot: RobotModel
@@ -264,8 +293,10 @@ class FlexiblePlant:
     motor_friction: Friction = None
     link_friction: Friction = None
     feedback: TorqueFeedback | None = None
+    integrator: str = "rosenbrock"
     _link_model: pin.Model = field(init=False, repr=False)
     _link_data: pin.Data = field(init=False, repr=False)
+    _loop: SpringLoop = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         n = self.robot.n_dof
@@ -284,10 +315,18 @@ class FlexiblePlant:
                 _joint_vector(self.feedback.damping, n, "D_s"),
             )
             object.__setattr__(self, "feedback", fb)
+        if self.integrator not in _INTEGRATORS:
+            raise InputValueError(
+                f"integrator must be one of {list(_INTEGRATORS)}; got {self.integrator!r}"
+            )
         link = self.robot.pinocchio_model.copy()
         link.armature = np.zeros(n)
         object.__setattr__(self, "_link_model", link)
         object.__setattr__(self, "_link_data", link.createData())
+        k, d = np.asarray(self.stiffness), np.asarray(self.damping)
+        feedback = self.feedback
+        loop = (b, d) if feedback is None else (feedback.motor_inertia, feedback.damping)
+        object.__setattr__(self, "_loop", SpringLoop(k, d, b, *loop))
 
     @property
     def n_dof(self) -> int:
@@ -304,17 +343,30 @@ class FlexiblePlant:
         return PlantState(q, qd, lugre[0], theta, qd.copy(), lugre[1])
 
     def substeps(self, dt: float, q: ArrayLike) -> int:
-        """RK4 substeps per period ``dt`` [s] for stability with these stiff joints."""
+        """Substeps per period ``dt`` [s] for these stiff joints, taken at ``q`` [rad].
+
+        RK4 keeps |λ h| ≤ 1 for the joint oscillation, the damping and the
+        friction; the implicit step only for the friction (explicit in it),
+        and h ω ≤ π for the joint oscillation ω [rad/s]: modes faster than
+        the substep's Nyquist frequency are damped, not resolved.
+        """
         link = self._link_model
         inertia = np.diag(pin.crba(link, self._link_data, np.asarray(q, float))).copy()
         b = np.asarray(self.motor_inertia)
         k = np.asarray(self.stiffness)
         d = np.asarray(self.damping)
+        friction = [
+            *_friction_rates(self.link_friction, inertia),
+            *_friction_rates(self.motor_friction, b),
+        ]
+        if self.integrator == "rosenbrock":
+            loop = np.asarray(self._loop.loop_inertia)
+            oscillation = float(np.max(np.sqrt(k * (1.0 / loop + 1.0 / inertia))))
+            return _substeps_for([oscillation / math.pi, *friction], check_dt(dt))
         rates = [
             float(np.max(np.sqrt(k * (1.0 / b + 1.0 / inertia)))),
             float(np.max(d * (1.0 / b + 1.0 / inertia))),
-            *_friction_rates(self.link_friction, inertia),
-            *_friction_rates(self.motor_friction, b),
+            *friction,
         ]
         if self.feedback is not None:
             rates.append(float(np.max(self.feedback.damping / self.feedback.motor_inertia)))
@@ -338,6 +390,35 @@ class FlexiblePlant:
         """
         if state.theta is None or state.thetad is None:
             raise ModelError("a flexible plant needs a state with motor positions (theta)")
+        if self.integrator == "rk4":
+            return self._advance_rk4(state, tau_m, tau_c, dt, substeps)
+        n = self.n_dof
+        h = dt / substeps
+        y = np.concatenate((state.q, state.qd, state.theta, state.thetad))
+        z, z_motor, t = state.z, state.z_motor, state.t
+        for _ in range(substeps):
+            y_new = self._loop.advance(
+                self._link_model,
+                self._link_data,
+                y,
+                tau_m,
+                tau_c,
+                _held_friction(self.link_friction, z, t),
+                _held_friction(self.motor_friction, z_motor, t),
+                h,
+            )
+            z = _advance_bristles(self.link_friction, z, 0.5 * (y[n : 2 * n] + y_new[n : 2 * n]), h)
+            z_motor = _advance_bristles(
+                self.motor_friction, z_motor, 0.5 * (y[3 * n :] + y_new[3 * n :]), h
+            )
+            y = y_new
+        return PlantState(y[:n], y[n : 2 * n], z, y[2 * n : 3 * n], y[3 * n :], z_motor, t + dt)
+
+    def _advance_rk4(
+        self, state: PlantState, tau_m: FloatArray, tau_c: FloatArray, dt: float, substeps: int
+    ) -> PlantState:
+        """The reference path: classical RK4 on the whole state (``integrator="rk4"``)."""
+        assert state.theta is not None and state.thetad is not None
         model, data = self._link_model, self._link_data
         n = self.n_dof
         k, d, b = (np.asarray(v) for v in (self.stiffness, self.damping, self.motor_inertia))

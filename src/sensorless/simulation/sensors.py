@@ -47,7 +47,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -224,6 +224,37 @@ class SensorModel:
             step = np.where(resolution > 0.0, resolution, 1.0)
             values = np.where(resolution > 0.0, np.round(values / step) * step, values)
         return self._reading(values, "position_noise", rng, single)
+
+    def position_reader(
+        self, n_dof: int, rng: np.random.Generator | None = None
+    ) -> Callable[[FloatArray], FloatArray]:
+        """:meth:`measure_position` of one sample, with the checks done once, here.
+
+        For a loop that reads the encoder at every sample (the simulator):
+        the returned function takes a finite array of shape (n_dof,) [rad]
+        and gives what ``measure_position(q, rng)`` gives, drawing the same
+        numbers from ``rng``.
+        """
+        resolution = self._per_joint("encoder_resolution", n_dof)
+        std = self._per_joint("position_noise", n_dof)
+        noisy = bool(np.any(std))
+        if noisy and not isinstance(rng, np.random.Generator):
+            raise InputTypeError(
+                "position_noise is on, so a numpy.random.Generator is needed "
+                f"(numpy.random.default_rng(seed)); got rng={rng!r}"
+            )
+        quantised = bool(np.any(resolution))
+        step = np.where(resolution > 0.0, resolution, 1.0)
+        on = resolution > 0.0
+
+        def read(q: FloatArray) -> FloatArray:
+            values = np.where(on, np.round(q / step) * step, q) if quantised else q.copy()
+            if noisy:
+                assert rng is not None
+                values = values + std * rng.standard_normal(n_dof)
+            return values
+
+        return read
 
     def measure_motor_torque(
         self, tau_m: ArrayLike, rng: np.random.Generator | None = None

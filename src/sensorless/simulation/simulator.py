@@ -47,7 +47,7 @@ class SimulationResult:
     desired : ndarray of shape (n_samples, n_dof)
         Desired joint positions of the trajectory [rad].
     substeps : int
-        RK4 substeps per control period.
+        Integrator substeps per control period.
     """
 
     log: Log
@@ -98,8 +98,8 @@ def simulate(
         Seed of the sensor noise (three independent streams are spawned
         from it: positions, motor torques, joint torques).
     substeps : int, optional
-        RK4 substeps per period; by default chosen for stability
-        (:meth:`RigidPlant.substeps`).
+        Integrator substeps per period; by default chosen for stability
+        (:meth:`RigidPlant.substeps`, :meth:`FlexiblePlant.substeps`).
     metadata : dict, optional
         Stored in the log's metadata.
     progress : callable(done, total), optional
@@ -144,14 +144,19 @@ def simulate(
     friction = np.empty((n_samples, n))
     command = np.empty((n_samples, n))
     collision_id = np.zeros(n_samples, dtype=np.int64)
+    # Everything below is checked once, here: the loop calls unchecked paths.
+    read_position = sensors.position_reader(n, position_rng)
+    step = controller._step_unchecked
     windows = [(c.profile.start, c.profile.end, c) for c in contacts]
+    inside = [(start <= t) & (t <= end) for start, end, _ in windows]
+    touched = np.logical_or.reduce(inside) if inside else np.zeros(n_samples, dtype=bool)
     no_contact = np.zeros(n)
     for k in range(n_samples):
-        q_meas[k] = sensors.measure_position(state.q, position_rng)
-        command[k], ctrl = controller.step(ctrl, q_meas[k], q_des[k], qd_des[k], period, qdd_des[k])
+        q_meas[k] = read_position(state.q)
+        command[k], ctrl = step(ctrl, q_meas[k], q_des[k], qd_des[k], period, qdd_des[k])
         contact = no_contact
-        active = [c for start, end, c in windows if start <= t[k] <= end]
-        if active:
+        if touched[k]:
+            active = [c for (_, _, c), mask in zip(windows, inside, strict=True) if mask[k]]
             contact = np.sum([c.joint_torque(plant.robot, state.q, t[k]) for c in active], axis=0)
             tau_c[k] = contact
             collision_id[k] = active[0].id if len(active) == 1 else contacts.active_id(t[k])

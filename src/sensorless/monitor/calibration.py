@@ -44,6 +44,8 @@ from ..exceptions import InputTypeError, InputValueError
 from ..signals import ObserverSignals
 from ..thresholds import Threshold
 from ..thresholds.checks import check_joints
+from ..thresholds.files import family_name
+from ..thresholds.velocity_bins import MIN_BIN_TIME
 from ._heldout import (
     DEFAULT_HOLD,
     DEFAULT_MIN_DURATION,
@@ -77,8 +79,6 @@ SHORT_HOURS = 10.0 / 60.0
 """Collision-free time [h] below which a per-hour figure rests on a handful of motions."""
 STILL_VELOCITY = 0.02
 """Speed [rad/s] below which a joint counts as still (in 99 % of its samples)."""
-MIN_BIN_TIME = 0.5
-"""Fit data [s] below which a velocity bin of the velocity family counts as sparse."""
 
 _ATTRIBUTE = "calibration_"
 
@@ -290,8 +290,8 @@ def cross_validate(
         hours.append(sum(piece.n_samples * piece.dt for piece in judged) / 3600.0)
     warnings = data_warnings(runs, threshold, sum(hours), level, target, pieces.transient)
     return Calibration(
-        threshold.name, scheme, labels, tuple(counts), tuple(hours), min_duration, hold, level,
-        tuple(warnings), target,
+        family_name(threshold), scheme, labels, tuple(counts), tuple(hours), min_duration, hold,
+        level, tuple(warnings), target,
     )  # fmt: skip
 
 
@@ -307,7 +307,7 @@ def data_warnings(
 
     Too little time for the stated rate (or under :data:`SHORT_HOURS`),
     monitored joints that never moved, and, for the velocity family, velocity
-    bins with less than :data:`MIN_BIN_TIME` of fit data. ``hours`` is the
+    bins with less than the threshold's ``min_bin_time`` of fit data (pooled). ``hours`` is the
     judged time [h], ``transient`` [s] the start of every run left out.
     """
     warnings = []
@@ -344,10 +344,16 @@ def data_warnings(
     sparse = _sparse_bins(runs, threshold, velocity, joints)
     if sparse:
         warnings.append(
-            f"velocity bins with less than {MIN_BIN_TIME:g} s of fit data: {'; '.join(sparse)}; "
-            "their bounds rest on few samples"
+            f"velocity bins with less than {_min_bin_time(threshold):g} s of fit data: "
+            f"{'; '.join(sparse)}; their L and U are pooled with neighbouring bins "
+            "(min_bin_time)"
         )
     return warnings
+
+
+def _min_bin_time(threshold: Threshold) -> float:
+    """The threshold's own ``min_bin_time`` [s], or the velocity family's default."""
+    return float(getattr(threshold, "min_bin_time", MIN_BIN_TIME))
 
 
 def _sparse_bins(
@@ -370,7 +376,7 @@ def _sparse_bins(
     else:
         return []
     period = float(np.median(np.concatenate([np.diff(run.t) for run in runs])))
-    least = MIN_BIN_TIME / period
+    least = _min_bin_time(threshold) / period
     found = []
     for j in joints:
         visited = np.flatnonzero(counts[:, j - 1] > 0)

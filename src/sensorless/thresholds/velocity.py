@@ -18,9 +18,11 @@ Fit (eq. 4.45, section 4.5.2), per joint: least squares of r̂ on the columns
 are γ and τ̂_fme(b). The indicators are filtered with the observer's
 zero-order-hold recursion (:func:`~sensorless.thresholds.filtering.first_order`),
 starting from their first value. With e = r̂ - γ h - K_I/(s+K_I)·τ̂_fme(q̇),
-L(b) = min e and U(b) = max e over the fit samples in bin b, widened by
-``margin``. The same fit serves r̂_s (eq. 4.37-4.39, 4.46): the sign of the
-τ̂_sfe term is absorbed by the fitted τ̂_fme, which is then -τ̂_sfe.
+L(b) = min e and U(b) = max e over the fit samples in bin b (pooled with
+neighbouring bins when b holds less than ``min_bin_time`` of fit data, see
+:mod:`sensorless.thresholds.velocity_bins`), widened by ``margin``. The
+same fit serves r̂_s (eq. 4.37-4.39, 4.46): the sign of the τ̂_sfe term is
+absorbed by the fitted τ̂_fme, which is then -τ̂_sfe.
 
 Combined form (eq. 4.19-4.21, 4.47): :class:`CombinedVelocityThreshold`
 fits r̂ and r̂_s of the same runs with one γ; see

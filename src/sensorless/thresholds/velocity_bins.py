@@ -9,6 +9,20 @@ grid uses the first or last bin. Where the velocity of a joint is outside
 the range of the bins it visited during fit, its bounds are widened by
 ``extrapolation_margin`` [N m].
 
+Sparse bins. L and U of a bin are the extremes of its fit errors, and the
+extreme of n exchangeable errors is exceeded by a new one with probability
+1/(n + 1): a bin the fit runs crossed in a few milliseconds (a via-point
+motion accelerating through it) gets a band that a new run leaves at once.
+So a bin with less than ``min_bin_time`` [s] of fit data takes L and U over
+the smallest window of bins [k - w, k + w] around it that holds that much
+(:func:`pool_sparse`); the whole grid when the joint has less. Every band
+then rests on at least ``min_bin_time`` of data, pooling never narrows a
+band, and a bin with enough data keeps its own. τ̂ of a sparse bin stays its
+own least-squares value. The default, :data:`MIN_BIN_TIME` = 0.5 s, is the
+fit time below which :class:`sensorless.monitor.Calibration` calls a bin
+sparse; ``min_bin_time=0`` is the rule without pooling (a never-visited bin
+takes the values of the nearest visited one).
+
 :class:`BinTable` is what LT/UT of one residual need; :func:`table_bounds`
 applies it to checked inputs. :class:`VelocityBinsThreshold` is the part of
 :class:`~sensorless.thresholds.velocity.VelocityThreshold` and
@@ -35,6 +49,7 @@ from .state import IntArray, ThresholdInputs, ThresholdState
 
 __all__ = [
     "MAX_BINS",
+    "MIN_BIN_TIME",
     "BinGrid",
     "BinTable",
     "VelocityBinsThreshold",
@@ -44,6 +59,9 @@ __all__ = [
 
 MAX_BINS = 10_000
 """Largest number of velocity bins; more means a ``bin_width`` far too small for the data."""
+
+MIN_BIN_TIME = 0.5
+"""Default ``min_bin_time`` [s]: fit data below which a bin's L and U are pooled with neighbours."""
 
 Solver = Callable[[int, FloatArray], tuple[float, FloatArray]]
 """``solve(j, basis)`` of :meth:`BinGrid.fit`: γ_j and the offsets of the visited bins."""
@@ -79,6 +97,59 @@ def fill_nearest(values: FloatArray, valid: BoolArray) -> FloatArray:
         nearest = source[np.argmin(np.abs(positions[:, None] - source[None, :]), axis=1)]
         filled[:, j] = values[nearest, j]
     return np.asarray(filled, dtype=np.float64)
+
+
+def pooled_windows(counts: IntArray, least: float) -> IntArray:
+    """Half-width w of the window of bins [k - w, k + w] behind the L and U of every bin.
+
+    0 for a bin with at least ``least`` fit samples; otherwise the smallest w
+    whose window (cut at the ends of the grid) holds ``least`` samples, or
+    the whole grid when the joint has fewer. Shape (n_bins, n_dof).
+    """
+    n_bins = counts.shape[0]
+    cumulative = np.vstack([np.zeros((1, counts.shape[1]), np.int64), np.cumsum(counts, axis=0)])
+    k = np.arange(n_bins)[:, None]
+    joints = np.arange(counts.shape[1])[None, :]
+
+    def held(w: IntArray) -> IntArray:
+        top = np.minimum(k + w + 1, n_bins)
+        bottom = np.maximum(k - w, 0)
+        return np.asarray(cumulative[top, joints] - cumulative[bottom, joints])
+
+    # Bisection on w for all bins at once: held(w) grows with w.
+    low = np.zeros(counts.shape, np.int64)  # held(low) may fall short
+    high = np.full(counts.shape, n_bins, np.int64)  # the whole grid: enough, or all there is
+    enough = counts >= least
+    high[enough] = 0
+    while np.any(high - low > 1):
+        middle = (low + high) // 2
+        ok = held(middle) >= least
+        high = np.where(ok, middle, high)
+        low = np.where(ok, low, middle)
+    return high
+
+
+def pool_sparse(
+    lower: FloatArray, upper: FloatArray, counts: IntArray, least: float
+) -> tuple[FloatArray, FloatArray]:
+    """L and U of every bin from the fit samples of its window (:func:`pooled_windows`).
+
+    ``lower`` and ``upper`` are the per-bin extremes of the fit errors (+/-inf
+    in empty bins). A bin with ``least`` samples or more keeps its own; a
+    sparser one takes the extremes over the smallest window of bins around it
+    that holds ``least`` samples. With ``least <= 0`` nothing is pooled and an
+    empty bin takes the values of the nearest visited one (ties: lower).
+    """
+    if least <= 0:
+        visited = counts > 0
+        return fill_nearest(lower, visited), fill_nearest(upper, visited)
+    windows = pooled_windows(counts, least)
+    pooled_lower, pooled_upper = lower.copy(), upper.copy()
+    for k, j in np.argwhere(windows > 0):
+        window = slice(max(k - windows[k, j], 0), k + windows[k, j] + 1)
+        pooled_lower[k, j] = lower[window, j].min()
+        pooled_upper[k, j] = upper[window, j].max()
+    return pooled_lower, pooled_upper
 
 
 def check_widths(bin_width: Any, extrapolation_margin: Any) -> tuple[float, float]:
@@ -165,9 +236,18 @@ class BinGrid(NamedTuple):
         return gamma, [fill_nearest(table, visited_bins) for table in tables]
 
     def bounds(
-        self, runs: list[ObserverSignals], gamma: FloatArray, tau: FloatArray, margin: FloatArray
+        self,
+        runs: list[ObserverSignals],
+        gamma: FloatArray,
+        tau: FloatArray,
+        margin: FloatArray,
+        least: float,
     ) -> tuple[FloatArray, FloatArray, IntArray]:
-        """L and U per bin and joint (eq. 4.32), widened by ``margin``, and fit samples per bin."""
+        """L and U per bin and joint (eq. 4.32), widened by ``margin``, and fit samples per bin.
+
+        Bins with fewer than ``least`` fit samples take the extremes of their
+        neighbours' (:func:`pool_sparse`).
+        """
         n_bins, n_dof = tau.shape
         errors, centres = [], []
         for run, index, dt in zip(runs, self.bins, self.periods, strict=True):
@@ -185,8 +265,9 @@ class BinGrid(NamedTuple):
             np.add.at(counts[:, j], kept[:, j], 1)
         residual = np.concatenate([run.residual for run in runs])
         guard = rounding_guard(residual, np.concatenate(centres))
-        lower = fill_nearest(lower, counts > 0) - margin - guard
-        upper = fill_nearest(upper, counts > 0) + margin + guard
+        lower, upper = pool_sparse(lower, upper, counts, least)
+        lower = lower - margin - guard
+        upper = upper + margin + guard
         return lower, upper, counts
 
 
@@ -243,6 +324,7 @@ class VelocityBinsThreshold(Threshold):
 
     bin_width: Any
     extrapolation_margin: Any
+    min_bin_time: Any
 
     gamma_: FloatArray
     bin_edges_: FloatArray
@@ -254,12 +336,33 @@ class VelocityBinsThreshold(Threshold):
         margin: Any = 0.0,
         extrapolation_margin: float = 0.0,
         *,
+        min_bin_time: float = MIN_BIN_TIME,
         joints: Any = None,
         transient: float = 0.0,
     ) -> None:
         super().__init__(margin, joints=joints, transient=transient)
         self.bin_width = bin_width
         self.extrapolation_margin = extrapolation_margin
+        self.min_bin_time = min_bin_time
+
+    @property
+    def pooled_bins_(self) -> BoolArray:
+        """Bins whose L and U are pooled with neighbours, shape (n_bins, n_dof).
+
+        The bins with less than ``min_bin_time`` of fit data (``counts_ *
+        dt_``), never-visited ones included; ``pooled_bins_.sum(axis=0)``
+        counts them per joint.
+        """
+        self._check_fitted()
+        return np.asarray(self.counts_ < self._least(self.dt_))
+
+    def _least(self, period: float) -> float:
+        """Fit samples [-] a bin needs for its own L and U at sample period ``period`` [s]."""
+        return check_scalar(self.min_bin_time, "min_bin_time", "s", "nonnegative") / period
+
+    def _fit_least(self, runs: list[ObserverSignals]) -> float:
+        """:meth:`_least` at the median period of checked fit runs (what becomes ``dt_``)."""
+        return self._least(float(np.median(np.concatenate([np.diff(run.t) for run in runs]))))
 
     def _period(self, t: FloatArray, what: str) -> float:
         return regular_period(t, what)
@@ -267,10 +370,12 @@ class VelocityBinsThreshold(Threshold):
     def _grid(self, runs: list[ObserverSignals], keep: list[BoolArray], what: str) -> BinGrid:
         """Check the hyper-parameters and lay the bins over checked fit runs."""
         width, _ = check_widths(self.bin_width, self.extrapolation_margin)
+        check_scalar(self.min_bin_time, "min_bin_time", "s", "nonnegative")
         return BinGrid.of_runs(runs, keep, width, what)
 
     def _check_attributes(self) -> None:
         check_widths(self.bin_width, self.extrapolation_margin)
+        check_scalar(self.min_bin_time, "min_bin_time", "s", "nonnegative")
         per_bin = {name: getattr(self, name) for name in self._per_bin}
         check_table(self.bin_edges_, self.gamma_, self.n_dof_, per_bin)
 

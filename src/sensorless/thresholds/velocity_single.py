@@ -30,6 +30,10 @@ class VelocityThreshold(VelocityBinsThreshold):
     extrapolation_margin : float
         Extra widening [N m] where a joint's velocity is outside the bins it
         visited during fit, >= 0.
+    min_bin_time : float
+        Fit data [s] a bin needs for its own L and U, >= 0; a sparser bin
+        takes them over the nearest bins that together hold this much (see
+        :mod:`sensorless.thresholds.velocity_bins`). 0: no pooling.
     joints, transient
         As for every family, see :class:`~sensorless.thresholds.base.Threshold`.
 
@@ -44,8 +48,11 @@ class VelocityThreshold(VelocityBinsThreshold):
     lower_, upper_ : ndarray of shape (n_bins, n_dof)
         L and U per bin and joint [N m] (include ``margin``).
     counts_ : ndarray of shape (n_bins, n_dof)
-        Number of fit samples per bin and joint; 0 marks a bin filled from
-        the nearest visited one.
+        Number of fit samples per bin and joint; 0 marks a bin the fit runs
+        never visited (τ̂_fme from the nearest visited one).
+    pooled_bins_ : ndarray of bool, shape (n_bins, n_dof)
+        Bins whose L and U are pooled (less than ``min_bin_time`` of fit
+        data); ``pooled_bins_.sum(axis=0)`` counts them per joint.
     """
 
     name = "velocity"
@@ -77,7 +84,9 @@ class VelocityThreshold(VelocityBinsThreshold):
         self.gamma_ = gamma
         self.bin_edges_ = grid.edges
         self.tau_fme_ = tau
-        self.lower_, self.upper_, self.counts_ = grid.bounds(runs, gamma, tau, margin)
+        self.lower_, self.upper_, self.counts_ = grid.bounds(
+            runs, gamma, tau, margin, self._fit_least(runs)
+        )
 
     def _initial_state_checked(
         self, inputs: ThresholdInputs, dt: float, kind: str | None = None

@@ -12,6 +12,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from sensorless.evaluation import (
     DEFAULT_MAX_DELAY,
@@ -220,14 +222,46 @@ def test_overlapping_events_give_first_start_and_last_end():
     assert [e.start for e in result.events] == [2.05, 2.2]
 
 
-def test_event_starting_before_the_window_has_negative_start_delay():
-    result = evaluate([event(1.9, 2.1)], make_log())
+def test_alarm_one_second_before_a_contact_is_a_false_alarm_and_masks_it():
+    # Was: an event from 1.9 s "detected" window 1 (start 2.0 s) with a start
+    # delay of -0.1 s. An alarm already on cannot tell of the contact (issue 18).
+    alarm = event(1.0, 2.3)
+    result = evaluate([alarm], make_log())
     row = result.per_collision.loc[1]
-    assert bool(row["detected"])
-    assert row["start_delay"] == pytest.approx(-0.1)
-    assert row["end_delay"] == pytest.approx(-0.4)
-    assert result.n_false_alarms == 0
-    assert result.mean_start_delay == pytest.approx(-0.1)
+    assert result.false_alarms == [alarm]
+    assert result.n_false_alarms == 1
+    assert (result.n_detected, result.n_masked, result.n_missed) == (0, 1, 2)
+    assert bool(row["masked"]) and not bool(row["detected"])
+    assert math.isnan(row["start_delay"]) and math.isnan(row["end_delay"])
+    assert result.detections == []
+    assert math.isnan(result.mean_start_delay)
+    assert result.summary()["n_masked"] == 1
+
+
+def test_alarm_that_ends_before_the_contact_masks_nothing():
+    result = evaluate([event(1.0, 1.99)], make_log())
+    assert result.n_false_alarms == 1
+    assert result.n_masked == 0
+    assert result.n_missed == 3
+
+
+def test_later_event_detects_a_masked_contact_with_a_positive_delay():
+    early, late = event(1.9, 2.1), event(2.2, 2.4)
+    result = evaluate([early, late], make_log())
+    row = result.per_collision.loc[1]
+    assert bool(row["detected"]) and not bool(row["masked"])
+    assert row["start_delay"] == pytest.approx(0.2)
+    assert result.false_alarms == [early]
+    assert result.detections == [late]
+
+
+def test_detection_running_into_the_next_contact_masks_it_and_stays_a_detection():
+    long = event(2.1, 5.1)  # starts inside window 1, still on when window 2 starts
+    result = evaluate([long], make_log(), max_delay=0.2)
+    assert list(result.per_collision["detected"]) == [True, False, False]
+    assert list(result.per_collision["masked"]) == [False, True, False]
+    assert result.detections == [long]
+    assert result.false_alarms == []
 
 
 def test_event_after_the_end_detects_within_max_delay():
@@ -252,11 +286,72 @@ def test_tolerance_excuses_events_just_before_a_window():
     assert tolerant.n_detected == 0  # excused is not a detection
 
 
-def test_event_spanning_two_windows_detects_both():
+def test_event_spanning_two_windows_masks_both():
+    # Was: detected both with a start delay of -0.1 s on window 2.
     result = evaluate([event(4.9, 8.1)], make_log())
-    assert list(result.per_collision["detected"]) == [False, True, True]
-    assert result.per_collision.loc[2, "start_delay"] == pytest.approx(-0.1)
-    assert result.per_collision.loc[3, "end_delay"] == pytest.approx(-0.1)
+    assert list(result.per_collision["detected"]) == [False, False, False]
+    assert list(result.per_collision["masked"]) == [False, True, True]
+    assert result.n_false_alarms == 1
+    assert (result.n_detected, result.n_masked, result.n_missed) == (0, 2, 1)
+
+
+def test_tolerance_excuses_an_alarm_starting_just_before_a_contact_which_is_masked():
+    early = [event(1.95, 2.2)]
+    strict = evaluate(early, make_log())
+    assert strict.false_alarms == early
+    assert strict.per_collision.loc[1, "masked"]
+    tolerant = evaluate(early, make_log(), tolerance=0.1)
+    assert tolerant.false_alarms == []
+    assert tolerant.excused == early
+    assert tolerant.per_collision.loc[1, "masked"]
+    assert tolerant.n_detected == 0
+
+
+def reference_outcome(events, windows, max_delay):
+    """Per window "detected", "masked" or "missed", one rule at a time (a second method)."""
+    outcome = {}
+    for ident, (start, end) in windows.items():
+        if any(start <= e.start <= end + max_delay for e in events):
+            outcome[ident] = "detected"
+        elif any(e.start < start <= e.end for e in events):
+            outcome[ident] = "masked"
+        else:
+            outcome[ident] = "missed"
+    return outcome
+
+
+@given(
+    st.lists(
+        st.tuples(st.floats(0.0, 10.0), st.floats(0.0, 3.0)).map(
+            lambda pair: (round(pair[0], 2), round(pair[0] + pair[1], 2))
+        ),
+        max_size=6,
+    )
+)
+@settings(max_examples=200, deadline=None)
+def test_outcomes_match_a_per_window_recount(intervals):
+    events = [event(start, end) for start, end in intervals]
+    result = evaluate(events, make_log())
+    expected = reference_outcome(events, WINDOWS, DEFAULT_MAX_DELAY)
+    table = result.per_collision
+    got = {
+        ident: "detected"
+        if table.loc[ident, "detected"]
+        else "masked"
+        if table.loc[ident, "masked"]
+        else "missed"
+        for ident in WINDOWS
+    }
+    assert got == expected
+    assert result.n_detected + result.n_masked + result.n_missed == result.n_collisions
+    assert (table["start_delay"].dropna() >= 0.0).all()
+    # An event detecting nothing is a false alarm (tolerance 0: nothing is excused).
+    detecting = {
+        i
+        for i, e in enumerate(events)
+        if any(s <= e.start <= w_end + DEFAULT_MAX_DELAY for s, w_end in WINDOWS.values())
+    }
+    assert result.n_false_alarms == len(events) - len(detecting)
 
 
 def test_empty_events():
@@ -270,7 +365,7 @@ def test_empty_events():
     assert math.isnan(result.max_start_delay)
     assert result.method == ""
     table = result.to_pandas()
-    assert table.shape == (3, 8)
+    assert table.shape == (3, 9)
     assert table["detected"].dtype == bool
 
 
@@ -310,6 +405,7 @@ def test_summary_and_to_pandas():
         "end",
         "peak_force",
         "detected",
+        "masked",
         "start_delay",
         "end_delay",
         "n_events",
@@ -385,6 +481,15 @@ def test_comparison_table_in_the_style_of_table_5_4():
     assert table.loc[3, ("constant", "end_delay")] == "Does not Detect"
 
 
+def test_comparison_table_names_masked_collisions():
+    log = make_log()
+    evaluations = {"a": evaluate([event(4.9, 5.2)], log), "b": evaluate([event(5.1, 5.2)], log)}
+    table = comparison_table(evaluations)
+    assert table.loc[2, ("a", "start_delay")] == "masked"
+    assert table.loc[2, ("b", "start_delay")] == pytest.approx(0.1)
+    assert table.loc[1, ("a", "start_delay")] == "missed"
+
+
 def test_summary_table_shape_and_values():
     table = summary_table(two_methods())
     assert list(table.index) == ["time-variant", "constant"]
@@ -397,7 +502,7 @@ def test_summary_table_shape_and_values():
     assert table.loc["constant", "false_alarm_rate"] == pytest.approx(360.0)
     assert table.loc["time-variant", "mean_start_delay"] == pytest.approx(0.04)
     assert table.loc["constant", "mean_start_delay"] == pytest.approx(0.31)
-    assert table.shape == (2, 10)
+    assert table.shape == (2, 12)
 
 
 def test_tables_reject_bad_input():

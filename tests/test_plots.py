@@ -114,7 +114,9 @@ def test_plot_residuals_artists():
     assert axes[-1].get_xlabel() == "time [s]"
     assert axes[1].get_ylabel() == r"$\hat{r}$ joint 2 [N m]"
     assert figure.get_suptitle() == "PUMA 560"
-    labels = [text.get_text() for text in axes[0].get_legend().get_texts()]
+    # The legend sits below the axes (a figure legend), never on the data.
+    assert all(ax.get_legend() is None for ax in axes)
+    labels = [text.get_text() for text in figure.legends[0].get_texts()]
     assert labels[:3] == [r"$\hat{r}$", "constant", "time-variant"]
     assert "collision" in labels
 

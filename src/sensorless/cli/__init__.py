@@ -17,6 +17,7 @@ from .benchmark import benchmark_command
 from .demo import demo_command
 from .identify import excite_command, identify_friction_command, identify_inertial_command
 from .importing import import_command
+from .report import report_command
 from .run import (
     detect_command,
     evaluate_command,
@@ -57,6 +58,7 @@ COMMANDS: dict[str, Callable[..., None]] = {
     "benchmark": benchmark_command,
     "excite": excite_command,
     "import": import_command,
+    "report": report_command,
 }
 for name, command in COMMANDS.items():
     app.command(name)(user_errors(command))

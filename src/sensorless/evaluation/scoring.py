@@ -34,6 +34,7 @@ _PER_COLLISION_COLUMNS = (
     "end",
     "peak_force",
     "detected",
+    "masked",
     "start_delay",
     "end_delay",
     "n_events",
@@ -89,25 +90,30 @@ class Evaluation:
     per_collision : DataFrame
         One row per window, indexed by collision ``id``, with columns ``start``,
         ``end`` [s], ``peak_force`` [N] (NaN if unknown), ``detected`` (bool),
-        ``start_delay``, ``end_delay`` [s] (NaN when missed), ``n_events``
-        (events detecting the window) and ``joints`` (tuple of the 1-based
-        joints of those events).
+        ``masked`` (bool: not detected, and an alarm that began before the
+        contact was still on when it started), ``start_delay``, ``end_delay``
+        [s] (NaN unless detected; the start delay is never negative),
+        ``n_events`` (events detecting the window) and ``joints`` (tuple of
+        the 1-based joints of those events).
     events : list of Event
         All evaluated events, by start time.
     detections : list of Event
         Events that detect at least one window.
     false_alarms : list of Event
-        Events outside every ``[start - tolerance, end + max_delay]``.
+        Events that detect no window and are not excused, among them every
+        alarm that began before a contact and was still on when it started.
     excused : list of Event
-        Events that only touch the ``tolerance`` margin before a window.
+        Events that start inside the ``tolerance`` margin before a window, or
+        only touch it without masking a window.
     duration : float
         Duration of the log [s] (last minus first time stamp).
     t_start : float
         First time stamp of the log [s].
     false_alarm_rate : float
         False alarms per hour of motion [1/h].
-    n_detected, n_missed : int
-        Detected and missed windows.
+    n_detected, n_masked, n_missed : int
+        Detected, masked and missed windows; they add up to the number of
+        windows.
     mean_start_delay : float
         Mean start delay over detected windows [s]; NaN if none is detected.
     tolerance, max_delay : float
@@ -129,6 +135,7 @@ class Evaluation:
     mean_start_delay: float
     tolerance: float = 0.0
     max_delay: float = DEFAULT_MAX_DELAY
+    n_masked: int = 0
 
     @property
     def n_collisions(self) -> int:
@@ -152,6 +159,12 @@ class Evaluation:
         delays = self.per_collision["start_delay"].to_numpy(dtype=float)
         return float(np.nanmax(delays)) if np.isfinite(delays).any() else math.nan
 
+    @property
+    def median_start_delay(self) -> float:
+        """Median start delay over detected windows [s]; NaN if none is detected."""
+        delays = self.per_collision["start_delay"].to_numpy(dtype=float)
+        return float(np.nanmedian(delays)) if np.isfinite(delays).any() else math.nan
+
     def to_pandas(self) -> pd.DataFrame:
         """The per-collision table (a copy of :attr:`per_collision`)."""
         return self.per_collision.copy()
@@ -162,20 +175,23 @@ class Evaluation:
         Returns
         -------
         dict
-            ``method``, ``n_collisions``, ``n_detected``, ``n_missed``,
-            ``detected`` (text ``"k/n"``), ``n_false_alarms``,
+            ``method``, ``n_collisions``, ``n_detected``, ``n_masked``,
+            ``n_missed``, ``detected`` (text ``"k/n"``), ``n_false_alarms``,
             ``false_alarm_rate`` [1/h], ``mean_start_delay``,
-            ``mean_end_delay``, ``max_start_delay`` [s] and ``duration`` [s].
+            ``median_start_delay``, ``mean_end_delay``, ``max_start_delay``
+            [s] and ``duration`` [s].
         """
         return {
             "method": self.method,
             "n_collisions": self.n_collisions,
             "n_detected": self.n_detected,
+            "n_masked": self.n_masked,
             "n_missed": self.n_missed,
             "detected": f"{self.n_detected}/{self.n_collisions}",
             "n_false_alarms": self.n_false_alarms,
             "false_alarm_rate": self.false_alarm_rate,
             "mean_start_delay": self.mean_start_delay,
+            "median_start_delay": self.median_start_delay,
             "mean_end_delay": self.mean_end_delay,
             "max_start_delay": self.max_start_delay,
             "duration": self.duration,
@@ -199,6 +215,12 @@ def evaluate(
 ) -> Evaluation:
     """Match detected events to the ground-truth collision windows of a log.
 
+    The rules are those of :mod:`sensorless.evaluation`. In short: an event
+    detects a window when it starts inside ``[start, end + max_delay]``; an
+    alarm that began before a contact and is still on when the contact
+    starts is a false alarm, and the contact counts as *masked* (unless a
+    later event detects it), never as detected with a negative delay.
+
     Parameters
     ----------
     events : iterable of Event
@@ -210,8 +232,9 @@ def evaluate(
         Name of the method; by default the ``method`` shared by all events
         (empty if they disagree).
     tolerance : float
-        Margin [s] before each window inside which an event is not counted as
-        a false alarm (nor as a detection). Default 0.
+        Margin [s] before each window: an event that starts inside it is
+        excused (neither a false alarm nor a detection; the window it covers
+        is masked). Default 0.
     max_delay : float, optional
         Time [s] after the end of a window during which an event still
         detects it. Default :data:`DEFAULT_MAX_DELAY` (0.5 s).
@@ -246,6 +269,9 @@ def evaluate(
     0.05
     >>> round(result.false_alarm_rate)  # one false alarm in 9.99 s of motion
     360
+    >>> early = evaluate([Event(1.0, 2.2, (1,), 1.0, 3.0)], log)  # on since 1 s before
+    >>> early.n_detected, early.n_masked, early.n_false_alarms
+    (0, 1, 1)
     """
     margin = _check_time_margin(tolerance, "tolerance")
     delay = _check_time_margin(DEFAULT_MAX_DELAY if max_delay is None else max_delay, "max_delay")
@@ -259,8 +285,13 @@ def evaluate(
     ends = np.array([e.end for e in checked], dtype=float)
     w_start = np.array([w.start for w in windows], dtype=float)
     w_end = np.array([w.end for w in windows], dtype=float)
-    detects = _overlaps(starts, ends, w_start, w_end + delay)
-    near = _overlaps(starts, ends, w_start - margin, w_end + delay)
+    # Matrices (n_events, n_windows) of the matching rules in the package docstring.
+    detects = (starts[:, None] >= w_start[None, :]) & (starts[:, None] <= (w_end + delay)[None, :])
+    masks = (starts[:, None] < w_start[None, :]) & (ends[:, None] >= w_start[None, :])
+    in_margin = (starts[:, None] >= (w_start - margin)[None, :]) & (
+        starts[:, None] < w_start[None, :]
+    )
+    touches = _overlaps(starts, ends, w_start - margin, w_start) if margin > 0.0 else in_margin
 
     rows = []
     for k, window in enumerate(windows):
@@ -274,6 +305,7 @@ def evaluate(
                 "end": window.end,
                 "peak_force": window.peak_force,
                 "detected": detected,
+                "masked": not detected and bool(masks[:, k].any()),
                 "start_delay": float(starts[hits].min() - window.start) if detected else math.nan,
                 "end_delay": float(ends[hits].max() - window.end) if detected else math.nan,
                 "n_events": int(hits.size),
@@ -281,14 +313,19 @@ def evaluate(
             }
         )
     per_collision = pd.DataFrame(rows, columns=["id", *_PER_COLLISION_COLUMNS]).set_index("id")
-    per_collision["detected"] = per_collision["detected"].astype(bool)
+    for column in ("detected", "masked"):
+        per_collision[column] = per_collision[column].astype(bool)
     per_collision["n_events"] = per_collision["n_events"].astype(np.int64)
 
-    is_detection = [bool(row.any()) for row in detects]
-    is_false = [not row.any() for row in near]
+    is_detection: NDArray[np.bool_] = np.asarray(detects.any(axis=1), dtype=bool)
+    is_excused: NDArray[np.bool_] = ~is_detection & (
+        in_margin.any(axis=1) | (touches.any(axis=1) & ~masks.any(axis=1))
+    )
+    is_false: NDArray[np.bool_] = ~is_detection & ~is_excused
     duration = log.duration
-    n_false = sum(is_false)
+    n_false = int(is_false.sum())
     n_detected = int(per_collision["detected"].sum())
+    n_masked = int(per_collision["masked"].sum())
     delays = per_collision["start_delay"].to_numpy(dtype=float)
     return Evaluation(
         method=method,
@@ -297,19 +334,16 @@ def evaluate(
         events=checked,
         detections=[e for e, hit in zip(checked, is_detection, strict=True) if hit],
         false_alarms=[e for e, bad in zip(checked, is_false, strict=True) if bad],
-        excused=[
-            e
-            for e, hit, bad in zip(checked, is_detection, is_false, strict=True)
-            if not (hit or bad)
-        ],
+        excused=[e for e, excused in zip(checked, is_excused, strict=True) if excused],
         duration=duration,
         t_start=float(log.t[0]),
         false_alarm_rate=n_false / (duration / SECONDS_PER_HOUR),
         n_detected=n_detected,
-        n_missed=len(windows) - n_detected,
+        n_missed=len(windows) - n_detected - n_masked,
         mean_start_delay=float(np.nanmean(delays)) if n_detected else math.nan,
         tolerance=margin,
         max_delay=delay,
+        n_masked=n_masked,
     )
 
 

@@ -17,7 +17,7 @@ __all__ = ["comparison_table", "efficiency_table", "summary_table"]
 
 
 def comparison_table(
-    evaluations: Mapping[str, Evaluation], *, missed: str = "missed"
+    evaluations: Mapping[str, Evaluation], *, missed: str = "missed", masked: str = "masked"
 ) -> pd.DataFrame:
     """Per-collision delays of several methods side by side (Tables 4.3, 5.4, 5.9).
 
@@ -28,6 +28,9 @@ def comparison_table(
     missed : str
         Entry for a collision a method does not detect (the thesis writes
         "Does not Detect").
+    masked : str
+        Entry for a collision masked by an alarm that was already on when it
+        started (see :mod:`sensorless.evaluation`).
 
     Returns
     -------
@@ -36,7 +39,7 @@ def comparison_table(
         ``("window", "start")``, ``("window", "end")`` [s] and
         ``("window", "peak_force")`` [N], then for each method
         ``(name, "start_delay")`` and ``(name, "end_delay")`` [s], holding a
-        delay or ``missed``.
+        delay, ``missed`` or ``masked``.
 
     Raises
     ------
@@ -72,8 +75,10 @@ def comparison_table(
         table = evaluation.per_collision
         for key in ("start_delay", "end_delay"):
             columns[(name, key)] = [
-                float(value) if hit else missed
-                for value, hit in zip(table[key], table["detected"], strict=True)
+                float(value) if hit else masked if hidden else missed
+                for value, hit, hidden in zip(
+                    table[key], table["detected"], table["masked"], strict=True
+                )
             ]
     result = pd.DataFrame(columns, index=pd.Index(windows.index, name="collision"))
     result.columns = pd.MultiIndex.from_tuples(list(columns), names=["method", "quantity"])

@@ -11,7 +11,9 @@ ramped over 2 s) and fast impacts (40 N, 0.15 s). Outside the monitor:
    demo's margin (10 % of β), detecting on the rest; *fixed tv*: the
    time-variant threshold (eq. 5.34) fitted the same way (margin 10 % of α);
 3. *adaptive*: a :class:`~sensorless.observers.adaptive.FrictionAdapter`
-   after the observer; on the first 300 s (collision-free by the user's
+   after the observer (friction, offset and, unless ``--friction-only``, the
+   relative model error on the model torque h, bounded by twice the largest
+   |h| of the tuning window); on the first 300 s (collision-free by the user's
    declaration, as every tuning run) it learns from every settled sample and
    the constant threshold is fitted on the corrected residual of its second
    half; afterwards it learns only from samples its own detector trusts:
@@ -122,6 +124,7 @@ def adapt_causally(
     beta: np.ndarray,
     guard: float,
     chunk: int = 100,
+    model_torque: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Corrected residual and trusted mask, trust from the adapted detector's own exceedances.
 
@@ -133,6 +136,7 @@ def adapt_causally(
     """
     monitored = [j - 1 for j in JOINTS]
     r_hat, qd = signals.residual, signals.velocity
+    h = signals.model_torque if model_torque else None
     n = r_hat.shape[0]
     out, trusted = np.empty_like(r_hat), np.zeros(n, dtype=bool)
     guard_samples = round(guard / adapter.dt)
@@ -141,11 +145,12 @@ def adapt_causally(
         block = slice(first, min(first + chunk, n))
         index = np.arange(block.start, block.stop)
         mask = index - last_exceedance > guard_samples
-        corrected, new_state = adapter.run(r_hat[block], qd[block], mask, state)
+        rows = None if h is None else h[block]
+        corrected, new_state = adapter.run(r_hat[block], qd[block], mask, state, rows)
         exceed = (np.abs(corrected[:, monitored]) > beta[monitored]).any(axis=1)
         if exceed.any():
             mask[int(np.argmax(exceed)) :] = False
-            corrected, new_state = adapter.run(r_hat[block], qd[block], mask, state)
+            corrected, new_state = adapter.run(r_hat[block], qd[block], mask, state, rows)
             exceed = (np.abs(corrected[:, monitored]) > beta[monitored]).any(axis=1)
             last_exceedance = int(index[np.flatnonzero(exceed)[-1]])
         out[block], trusted[block], state = corrected, mask, new_state
@@ -159,6 +164,11 @@ def main() -> None:
     parser.add_argument("--rate-limit", type=float, default=0.05, help="[N m/s]")
     parser.add_argument("--forgetting-time", type=float, default=60.0, help="[s]")
     parser.add_argument("--skip-monitor", action="store_true", help="Leave out variant 4.")
+    parser.add_argument(
+        "--friction-only",
+        action="store_true",
+        help="Adapt friction and offsets only (no relative model error on h).",
+    )
     args = parser.parse_args()
 
     log = simulated_log(args.log)
@@ -186,6 +196,9 @@ def main() -> None:
     assert friction is not None
     level = np.abs(friction.torque(np.full(nominal.n_dof, 2.0)))
     level = np.maximum(level, np.abs(friction.torque(np.full(nominal.n_dof, -2.0))))
+    learn = rows(signals, 0.0, TUNING)
+    # Bound of |h| for the model-error term: twice the largest seen while tuning.
+    h_max = None if args.friction_only else 2.0 * np.abs(learn.model_torque).max(axis=0)
     adaptation = Adaptation(
         rate_limit=args.rate_limit,
         max_correction=0.5 * level,
@@ -193,15 +206,19 @@ def main() -> None:
         guard=args.guard,
         smooth_velocity=0.05,
         max_velocity=2.0,
+        max_model_torque=h_max,
     )
     adapter = adaptation.adapter(MomentumObserver(nominal, log.dt, gain=settings.gain))
     start = time.perf_counter()
-    learn = rows(signals, 0.0, TUNING)
-    corrected, state = adapter.run(learn.residual, learn.velocity, learn.t >= settle)
+    h_learn = None if h_max is None else learn.model_torque
+    corrected, state = adapter.run(learn.residual, learn.velocity, learn.t >= settle, None, h_learn)
     half = 0.5 * TUNING
     fit_rows = learn.t >= half
     adaptive = fitted(dataclasses.replace(rows(learn, half, TUNING), residual=corrected[fit_rows]))
-    out, trusted = adapt_causally(adapter, state, test, adaptive.beta_, args.guard)
+    out, trusted = adapt_causally(
+        adapter, state, test, adaptive.beta_, args.guard, model_torque=h_max is not None
+    )
+    print(f"learned theta (joints 1-3): {np.round(state.theta[:3], 3).tolist()}")
     print(
         f"adapter over {log.duration:.0f} s: {time.perf_counter() - start:.1f} s; "
         f"trusted {trusted.mean():.1%} of the test samples"

@@ -358,3 +358,118 @@ def test_validation() -> None:
 def test_doctests() -> None:
     module = importlib.import_module("sensorless.observers.adaptive")
     assert doctest.testmod(module).failed == 0
+
+
+# ------------------------------------------------------------------ the model-torque term
+
+EPS_H = np.array([0.08, -0.05])  # relative model error θ_h [-]
+
+
+def _model_torque(n: int, seed: int) -> np.ndarray:
+    """A filtered model torque h [N m]: slow gravity-like swings plus inertial bursts."""
+    t = np.arange(n) * DT
+    rng = np.random.default_rng(seed)
+    h = np.stack([12.0 * np.sin(2 * np.pi * 0.3 * t), 30.0 + 8.0 * np.cos(2 * np.pi * 0.9 * t)], 1)
+    return h + 0.5 * rng.standard_normal(h.shape)
+
+
+def test_model_torque_term_equals_weighted_least_squares() -> None:
+    """θ = (θ_c, θ_v, θ_0, θ_h): r̂ = F(φᵀθ_fr) + θ_h·h, h already filtered."""
+    n = 6000
+    qd, h = _motion(n, 7), _model_torque(n, 7)
+    phi = _regressor(qd)
+    rng = np.random.default_rng(8)
+    r_hat = _filtered(np.einsum("knc,nc->kn", phi, THETA), GAIN) + EPS_H * h
+    r_hat += 0.01 * rng.standard_normal(r_hat.shape)
+    adapter = _unlimited(max_model_torque=100.0)
+    assert adapter.columns == 4
+    out, state = adapter.run(r_hat, qd, np.ones(n, dtype=bool), model_torque=h)
+
+    lam = adapter.forgetting_factor
+    psi = np.concatenate(
+        [np.stack([_filtered(phi[:, :, c], GAIN) for c in range(3)], -1), h[:, :, None]], -1
+    )
+    for j in range(2):
+        weight = np.sqrt(lam ** (n - 1 - np.arange(1, n)))
+        rows = np.vstack([weight[:, None] * psi[1:, j], np.sqrt(lam ** (n - 1) / 1e3) * np.eye(4)])
+        target = np.concatenate([weight * r_hat[1:, j], np.zeros(4)])
+        np.testing.assert_allclose(state.theta[j], linalg.lstsq(rows, target)[0], rtol=1e-7)
+        np.testing.assert_allclose(state.theta[j, :3], THETA[j], atol=0.05)
+        np.testing.assert_allclose(state.theta[j, 3], EPS_H[j], atol=2e-3)
+    # Once learned, the model error leaves the residual with the friction error.
+    assert np.abs(out[-1000:]).max() < 0.1 * np.abs(r_hat[-1000:]).max()
+    # The friction-only adapter cannot remove the θ_h·h part.
+    rest, _ = _unlimited().run(r_hat, qd, np.ones(n, dtype=bool))
+    assert np.abs(rest[-1000:]).max() > 5 * np.abs(out[-1000:]).max()
+
+
+def test_model_torque_term_step_equals_run_and_honours_the_rate_limit() -> None:
+    r_hat, qd, trusted = _inputs(1500, 9)
+    h = _model_torque(1500, 9)
+    h[700, 1] = np.nan
+    r_hat = r_hat + EPS_H * np.nan_to_num(h)
+    rate, h_max = 0.5, 50.0
+    adapter = FrictionAdapter(
+        2, DT, GAIN, rate_limit=rate, max_correction=3.0, max_model_torque=h_max
+    )
+    whole, state = adapter.run(r_hat, qd, trusted, model_torque=h)
+    stepped = adapter.initial_state()
+    weight = np.array([1.0, adapter._max_velocity[0], 1.0, h_max])
+    rows = []
+    for k in range(r_hat.shape[0]):
+        row, new = adapter.step(stepped, r_hat[k], qd[k], trusted[k], h[k])
+        assert (np.abs(new.theta - stepped.theta) @ weight <= rate * DT * (1 + 1e-9)).all()
+        if not np.isfinite(h[k]).all():  # a non-finite h changes nothing
+            np.testing.assert_array_equal(new.theta, stepped.theta)
+            np.testing.assert_array_equal(new.covariance, stepped.covariance)
+        rows.append(row)
+        stepped = new
+    np.testing.assert_array_equal(np.array(rows), whole)
+    np.testing.assert_array_equal(stepped.theta, state.theta)
+    # |θ_h| stays in the box max_correction / max_model_torque.
+    assert (np.abs(state.theta[:, 3]) <= 3.0 / h_max + 1e-12).all()
+
+
+def test_model_torque_is_required_exactly_when_the_term_is_on() -> None:
+    on = FrictionAdapter(2, DT, GAIN, rate_limit=1.0, max_correction=1.0, max_model_torque=10.0)
+    off = FrictionAdapter(2, DT, GAIN, rate_limit=1.0, max_correction=1.0)
+    with pytest.raises(InputValueError, match="pass model_torque"):
+        on.step(on.initial_state(), [0.0, 0.0], [0.0, 0.0], True)
+    with pytest.raises(InputValueError, match="no model-torque term"):
+        off.step(off.initial_state(), [0.0, 0.0], [0.0, 0.0], True, [1.0, 1.0])
+    with pytest.raises(DimensionError, match="3 parameters per joint; this adapter learns 4"):
+        on.step(off.initial_state(), [0.0, 0.0], [0.0, 0.0], True, [1.0, 1.0])
+    with pytest.raises(DimensionError, match="model_torque must have shape"):
+        on.run(np.zeros((5, 2)), np.zeros((5, 2)), True, model_torque=np.zeros((4, 2)))
+    with pytest.raises(InputValueError, match="max_model_torque"):
+        FrictionAdapter(2, DT, GAIN, rate_limit=1.0, max_correction=1.0, max_model_torque=-1.0)
+
+
+@pytest.mark.parametrize("max_model_torque", [None, 60.0])
+def test_compiled_kernel_equals_the_numpy_recursion(
+    monkeypatch: pytest.MonkeyPatch, max_model_torque: float | None
+) -> None:
+    """The numba kernel (step and run) against FrictionAdapter._advance, to rounding."""
+    from sensorless.observers import _adaptive_kernel
+
+    if _adaptive_kernel.compiled is None:
+        pytest.skip("numba is not installed: the numpy recursion is the only path")
+    r_hat, qd, trusted = _inputs(2500, 11)
+    h = _model_torque(2500, 11)
+    h[900, 0] = np.inf
+    r_hat = r_hat + EPS_H * np.nan_to_num(h, posinf=0.0)
+    adapter = FrictionAdapter(
+        2, DT, GAIN, rate_limit=2.0, max_correction=3.0, max_trace=50.0,
+        max_model_torque=max_model_torque,
+    )  # fmt: skip
+    given = None if max_model_torque is None else h
+    compiled, state = adapter.run(r_hat, qd, trusted, model_torque=given)
+    monkeypatch.setattr(_adaptive_kernel, "compiled", None)
+    reference, expected = adapter.run(r_hat, qd, trusted, model_torque=given)
+    np.testing.assert_allclose(compiled, reference, rtol=1e-12, atol=1e-12)
+    for name in ("theta", "estimate", "covariance", "filtered_regressor", "filtered_correction"):
+        np.testing.assert_allclose(
+            getattr(state, name), getattr(expected, name), rtol=1e-10, atol=1e-12
+        )
+    np.testing.assert_array_equal(state.updates, expected.updates)
+    assert state.started == expected.started

@@ -53,6 +53,9 @@ class ObserverSignals:
         Estimated joint accelerations [rad/s²] (acceleration-based estimate only).
     metadata : dict
         Anything else (log metadata, filter settings).
+    fingerprint : str
+        Fingerprint of the nominal model's dynamic parameters
+        (:attr:`sensorless.robots.RobotModel.fingerprint`); empty when unknown.
     """
 
     t: FloatArray
@@ -67,6 +70,7 @@ class ObserverSignals:
     position: FloatArray | None = None
     acceleration: FloatArray | None = None
     metadata: dict[str, Any] = field(default_factory=dict)
+    fingerprint: str = ""
 
     def __post_init__(self) -> None:
         t = np.asarray(self.t, dtype=float)

@@ -4,7 +4,8 @@ Friction and torque offsets drift as an arm warms up; a threshold tuned on
 a cold arm then alarms on a warm one. With an :class:`Adaptation`, a
 :class:`~sensorless.monitor.CollisionMonitor` corrects the momentum residual
 by a :class:`~sensorless.observers.adaptive.FrictionAdapter` (recursive least
-squares on the Coulomb/viscous/offset regressor, rate-limited and bounded)
+squares on the Coulomb/viscous/offset regressor, optionally with the relative
+model error on the model torque, rate-limited and bounded)
 placed between the observer and the threshold, and feeds it only with
 samples its own detector holds collision-free:
 
@@ -55,6 +56,11 @@ class Adaptation:
         Velocity scale of the smooth sign tanh(q̇/v_s) of the Coulomb term [rad/s], > 0.
     max_velocity : float
         Velocity range over which ``rate_limit`` and ``max_correction`` hold [rad/s], > 0.
+    max_model_torque : float or array-like of shape (n_dof,), optional
+        Learn the relative model error on the observer's model torque h too
+        (see :class:`~sensorless.observers.adaptive.FrictionAdapter`): the
+        bound on |h| [N m] over which the rate limit and the bound hold. None
+        (default): friction and offsets only.
     """
 
     rate_limit: Any = 0.05
@@ -63,6 +69,7 @@ class Adaptation:
     guard: float = 2.0
     smooth_velocity: float = 0.02
     max_velocity: float = 2.0
+    max_model_torque: Any = None
 
     def __post_init__(self) -> None:
         check_scalar(self.forgetting_time, "forgetting_time", "s")
@@ -79,4 +86,5 @@ class Adaptation:
             forgetting_time=self.forgetting_time,
             smooth_velocity=self.smooth_velocity,
             max_velocity=self.max_velocity,
+            max_model_torque=self.max_model_torque,
         )

@@ -23,6 +23,7 @@ from ..detection import TIME_TOLERANCE
 from ..exceptions import InputValueError
 from ..io import Log
 from ..signals import Event, ObserverSignals
+from ..thresholds.files import family_name
 
 if TYPE_CHECKING:
     from ._fused import FusedStream
@@ -153,6 +154,7 @@ def _result(
         gain=monitor._observer.gain if kind != "acceleration" else np.full(log.n_dof, np.nan),
         kind=kind,
         robot=monitor.robot.name,
+        fingerprint=monitor.robot.fingerprint,
         position=np.asarray(log.q),
         acceleration=out["acceleration"] if kind == "acceleration" else None,
         metadata={
@@ -188,7 +190,7 @@ def _run_fused(
     tau_j = np.ascontiguousarray(log.tau_j if sensed else log.tau_m, dtype=np.float64)
     # The joint-torque stream checks the motor torques' limits too, when the log has them.
     tau_m = tau_j if log.tau_m is None else np.ascontiguousarray(log.tau_m, dtype=np.float64)
-    codes, series, events = fused.block(t, (q, qd, tau_m, tau_j), monitor.threshold.name)
+    codes, series, events = fused.block(t, (q, qd, tau_m, tau_j), family_name(monitor.threshold))
     status = codes & 15
     bad = status >= fused.FAULT
     settling = status == fused.SETTLING
@@ -413,6 +415,7 @@ def _rows(
         gain=signals.gain,
         kind=signals.kind,
         robot=signals.robot,
+        fingerprint=signals.fingerprint,
         position=None if signals.position is None else signals.position[rows],
         acceleration=None if acceleration is None else acceleration[rows],
         metadata=signals.metadata,

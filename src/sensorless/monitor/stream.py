@@ -35,6 +35,8 @@ from ..observers.adaptive import AdapterState
 from ..robots.model import RobotModel
 from ..signals import Event, ObserverSignals
 from ..thresholds import ModelBasedThreshold, Threshold, ThresholdInputs
+from ..thresholds.checks import other_model, parameters_differ
+from ..thresholds.files import family_name
 from .adaptation import Adaptation
 from .batch import BOUNDS_FAULT, OBSERVER_FAULT, MonitorRun, run_log, value_fault
 from .policy import StreamPolicy
@@ -146,11 +148,16 @@ class CollisionMonitor:
                 f"threshold is for {threshold.n_dof_} joints ({threshold.robot_}); "
                 f"robot {robot.name!r} has {robot.n_dof}"
             )
-        if threshold.robot_ not in ("", robot.name):
+        fingerprint = threshold.model_fingerprint(settings.kind)
+        if threshold.robot_ and other_model(
+            threshold.robot_, fingerprint, robot.name, robot.fingerprint
+        ):
             raise ModelMismatchError(
                 f"threshold is for robot {threshold.robot_!r} ({threshold.n_dof_} joints); robot "
                 f"{robot.name!r} has as many joints but is another model (another robot, a "
-                "payload or other parameters): tune on logs observed with this model"
+                "payload or other parameters"
+                + parameters_differ(fingerprint, robot.fingerprint)
+                + "): tune on logs observed with this model"
             )
         self.robot = robot
         self.threshold = threshold
@@ -366,7 +373,7 @@ class CollisionMonitor:
         out = np.empty((3, n))
         sample = (q_arr, qd_arr, tau_arr, sensed)
         try:
-            status, joints, event = fused.run(time, sample, out, self.threshold.name)
+            status, joints, event = fused.run(time, sample, out, family_name(self.threshold))
         except Exception as exc:  # fail-safe: no data may crash the stream
             return self._fault(time, f"the sample could not be processed: {exc!r}")
         if status in _STATUSES:
@@ -476,7 +483,7 @@ class CollisionMonitor:
         if self._adapter is not None and adapter is not None:
             trusted = not settling and not self._latched and time >= stream.quiet_from
             residual, adapter = self._adapter._step_checked(
-                adapter, residual, velocity, self._trust[int(trusted)]
+                adapter, residual, velocity, self._trust[int(trusted)], model_torque
             )
         detector = stream.detector
         if settling:
@@ -550,7 +557,7 @@ class CollisionMonitor:
     def finish(self) -> Event | None:
         """Close the stream: the event still open, if any."""
         if self._fused is not None:
-            return self._fused.finish(self.threshold.name)
+            return self._fused.finish(family_name(self.threshold))
         stream = self._stream
         if stream is None or stream.detector is None:
             return None

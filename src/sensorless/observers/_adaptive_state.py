@@ -28,17 +28,18 @@ class AdapterState:
 
     Attributes
     ----------
-    theta : ndarray of shape (n_dof, 3)
-        Applied parameters per joint: θ_c [N m], θ_v [N m s/rad], θ_0 [N m];
+    theta : ndarray of shape (n_dof, columns)
+        Applied parameters per joint: θ_c [N m], θ_v [N m s/rad], θ_0 [N m]
+        (and θ_h [-], the relative model error, with the model-torque term);
         they follow ``estimate`` at the rate limit, inside the box.
-    estimate : ndarray of shape (n_dof, 3)
+    estimate : ndarray of shape (n_dof, columns)
         RLS estimate of θ, unconstrained (same units).
-    covariance : ndarray of shape (n_dof, 3, 3)
+    covariance : ndarray of shape (n_dof, columns, columns)
         RLS covariance P per joint (units of θ squared per N m²).
     regressor : ndarray of shape (n_dof, 3)
         φ of the last sample: tanh(q̇/v_s) [-], q̇ [rad/s], 1 [-].
-    filtered_regressor : ndarray of shape (n_dof, 3)
-        ψ = F(φ) at the last sample.
+    filtered_regressor : ndarray of shape (n_dof, columns)
+        ψ = F(φ) at the last sample (and h [N m], the model torque).
     correction : ndarray of shape (n_dof,)
         Correction δτ applied at the last sample [N m].
     filtered_correction : ndarray of shape (n_dof,)
@@ -94,7 +95,7 @@ class _Work:
             estimate.copy(),
             covariance.copy(),
         )
-        work.regressor, work.filtered_regressor = np.zeros((n, 3)), np.zeros((n, 3))
+        work.regressor, work.filtered_regressor = np.zeros((n, 3)), np.zeros(theta.shape)
         work.correction, work.filtered_correction = np.zeros(n), np.zeros(n)
         work.started = False
         work.updates = np.zeros(n, dtype=np.int64) if updates is None else updates.copy()

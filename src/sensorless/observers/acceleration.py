@@ -192,6 +192,7 @@ class AccelerationObserver(_NominalObserver):
             gain=np.full(n, np.nan),
             kind="acceleration",
             robot=self.robot.name,
+            fingerprint=self.robot.fingerprint,
             position=q_arr,
             acceleration=y.acceleration,
             metadata=self.settings(),

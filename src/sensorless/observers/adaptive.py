@@ -22,6 +22,16 @@ the observer discretises its friction input (pole a = exp(−K_I dt), weight
 1 − a, trapezoid of two samples, zero at the first sample as r̂_0 = 0), so
 with a constant θ the correction F(δτ) equals ψᵀθ sample by sample.
 
+With ``max_model_torque`` set, a fourth column learns a relative model
+error: ψ_h = h_j, the observer's filtered model torque
+h = F(M̂q̈ + Ĉq̇ + ĝ) (eq. 4.26), and the corrected residual is
+r̂ − F(δτ) − θ_h·h. This is the ε·h of the thesis's time-variant bound
+(eq. 5.34) learned instead of bounded: as friction warms, a controller that
+compensates the cold friction kicks the arm at each start and stop, and
+those accelerations reach the residual through the inertial model error,
+with no friction shape (measured on ``puma560-warmup``; see
+``benchmarks/drift_evidence.py``).
+
 Safety, because r̂ also carries the contacts the monitor must detect:
 
 * learning happens only on samples the caller marks ``trusted`` (the monitor
@@ -72,6 +82,7 @@ from .._validation import (
     per_joint,
 )
 from ..exceptions import DimensionError, InputValueError
+from . import _adaptive_kernel as _kernel
 from ._adaptive_state import (
     AdapterState,
     BoolArray,
@@ -84,6 +95,10 @@ from ._common import _check_gain
 from .momentum import MomentumObserver
 
 __all__ = ["AdapterState", "FrictionAdapter"]
+
+
+def _listed(value: FloatArray | None) -> Any:
+    return None if value is None else value.tolist()
 
 
 class FrictionAdapter:
@@ -115,6 +130,11 @@ class FrictionAdapter:
         Diagonal of the initial covariance P_0 [-], > 0.
     max_trace : float
         Bound on trace(P) per joint, > 0 (``inf`` for none).
+    max_model_torque : float or array-like of shape (n_dof,), optional
+        Learn the relative model error θ_h on the filtered model torque h too;
+        the bound on |h| [N m] over which ``rate_limit`` and
+        ``max_correction`` hold for that term, > 0. None (default): the three
+        friction/offset columns only.
 
     Notes
     -----
@@ -147,6 +167,7 @@ class FrictionAdapter:
         max_velocity: ArrayLike = 2.0,
         initial_covariance: float = 10.0,
         max_trace: float = 1.0e3,
+        max_model_torque: ArrayLike | None = None,
     ) -> None:
         n = check_int(n_dof, "n_dof", 1, "FrictionAdapter")
         self._n_dof = n
@@ -170,14 +191,27 @@ class FrictionAdapter:
         self._initial_covariance = check_scalar(initial_covariance, "initial_covariance", "-")
         self._max_trace = _positive_or_inf(max_trace, "max_trace", "-")
         self._step_bound = self._rate_limit * self._dt
+        self._max_model_torque = (
+            None
+            if max_model_torque is None
+            else per_joint(max_model_torque, n, "max_model_torque", "N m", "positive")
+        )
         # Norm weights of Δθ for the rate limit, and the box on θ.
-        self._norm_weight = np.stack(
-            [np.ones(n), self._max_velocity, np.ones(n)], axis=1
-        )  # fmt: skip
+        weights = [np.ones(n), self._max_velocity, np.ones(n)]
+        if self._max_model_torque is not None:
+            weights.append(self._max_model_torque)
+        self._norm_weight = np.stack(weights, axis=1)
+        self._columns = len(weights)
         with np.errstate(invalid="ignore"):
             self._box = self._max_correction[:, None] / self._norm_weight
         for arr in (self._pole, self._weight, self._norm_weight, self._box):
             arr.setflags(write=False)
+        self._params = (
+            self._pole, self._weight, self._smooth_velocity, self._max_correction,
+            np.ascontiguousarray(self._norm_weight), np.ascontiguousarray(self._box),
+            self._step_bound,
+        )  # fmt: skip
+        self._scalars = np.array([self._lambda, self._max_trace, float(self._columns)])
 
     @classmethod
     def from_observer(cls, observer: MomentumObserver, **options: Any) -> FrictionAdapter:
@@ -224,6 +258,11 @@ class FrictionAdapter:
         """Bound on |δτ| per joint [N m]."""
         return self._max_correction
 
+    @property
+    def columns(self) -> int:
+        """Number of learned parameters per joint: 3, or 4 with the model-torque term."""
+        return self._columns
+
     def __repr__(self) -> str:
         return (
             f"FrictionAdapter(n_dof={self._n_dof}, dt={self._dt!r}, gain={self._gain.tolist()}, "
@@ -232,7 +271,8 @@ class FrictionAdapter:
             f"forgetting_time={self._forgetting_time!r}, "
             f"smooth_velocity={self._smooth_velocity.tolist()}, "
             f"max_velocity={self._max_velocity.tolist()}, "
-            f"initial_covariance={self._initial_covariance!r}, max_trace={self._max_trace!r})"
+            f"initial_covariance={self._initial_covariance!r}, max_trace={self._max_trace!r}, "
+            f"max_model_torque={_listed(self._max_model_torque)})"
         )
 
     # ------------------------------------------------------------ state
@@ -243,10 +283,11 @@ class FrictionAdapter:
 
         Parameters
         ----------
-        theta : array-like of shape (n_dof, 3), optional
-            Starting θ (θ_c [N m], θ_v [N m s/rad], θ_0 [N m] per joint), e.g.
-            learned on an earlier run; zeros by default. Must lie in the box.
-        covariance : array-like of shape (n_dof, 3, 3), optional
+        theta : array-like of shape (n_dof, columns), optional
+            Starting θ (θ_c [N m], θ_v [N m s/rad], θ_0 [N m], and θ_h [-]
+            with the model-torque term, per joint), e.g. learned on an earlier
+            run; zeros by default. Must lie in the box.
+        covariance : array-like of shape (n_dof, columns, columns), optional
             Starting covariance; ``initial_covariance``·I by default.
 
         Returns
@@ -254,17 +295,18 @@ class FrictionAdapter:
         AdapterState
             The filters start from zero, as the observer's r̂_0 = 0.
         """
-        n = self._n_dof
-        start = np.zeros((n, 3)) if theta is None else _array(theta, (n, 3), "theta")
+        n, m = self._n_dof, self._columns
+        start = np.zeros((n, m)) if theta is None else _array(theta, (n, m), "theta")
         if (np.abs(start) > self._box).any():
             raise InputValueError(
-                "theta must lie in the box |θ_c|, max_velocity·|θ_v|, |θ_0| <= max_correction; "
+                "theta must lie in the box |θ_c|, max_velocity·|θ_v|, |θ_0| "
+                "(, max_model_torque·|θ_h|) <= max_correction; "
                 f"got {start.tolist()}"
             )
         if covariance is None:
-            cov = np.broadcast_to(self._initial_covariance * np.eye(3), (n, 3, 3)).copy()
+            cov = np.broadcast_to(self._initial_covariance * np.eye(m), (n, m, m)).copy()
         else:
-            cov = _array(covariance, (n, 3, 3), "covariance")
+            cov = _array(covariance, (n, m, m), "covariance")
             cov = 0.5 * (cov + np.swapaxes(cov, 1, 2))
             if (np.linalg.eigvalsh(cov) <= 0.0).any():
                 raise InputValueError("covariance must be positive definite for every joint")
@@ -300,12 +342,14 @@ class FrictionAdapter:
         -------
         ndarray of the shape of ``qd``
             δτ [N m], clipped to ±``max_correction``; add −δτ to the nominal
-            friction τ̂_fr to get the adapted nominal friction.
+            friction τ̂_fr to get the adapted nominal friction. (The
+            model-torque term θ_h is a relative error of the whole model, not
+            friction: it is not part of δτ.)
         """
         state = self._check_state(state)
         arr, single = as_joint_array(qd, self._n_dof, "qd")
         delta = np.clip(
-            np.einsum("knc,nc->kn", self._regressor(arr), state.theta),
+            np.einsum("knc,nc->kn", self._regressor(arr), state.theta[:, :3]),
             -self._max_correction, self._max_correction,
         )  # fmt: skip
         return delta[0] if single else delta
@@ -313,11 +357,44 @@ class FrictionAdapter:
     def _check_state(self, state: Any) -> AdapterState:
         check_type(state, AdapterState, "state", " from initial_state, step or run")
         check_state_joints(state.n_dof, self._n_dof, "the adapter")
+        if state.theta.shape[1] != self._columns:
+            raise DimensionError(
+                f"state has {state.theta.shape[1]} parameters per joint; this adapter learns "
+                f"{self._columns} (max_model_torque {'set' if self._columns == 4 else 'unset'})"
+            )
         return state
+
+    def _model_torque(self, value: ArrayLike | None, shape: tuple[int, ...]) -> FloatArray:
+        """h checked against ``shape``; zeros (unused) without the model-torque term."""
+        if self._max_model_torque is None:
+            if value is not None:
+                raise InputValueError(
+                    "model_torque is given but the adapter has no model-torque term; "
+                    "construct it with max_model_torque"
+                )
+            return np.zeros(shape)
+        if value is None:
+            raise InputValueError(
+                "this adapter learns a model-torque term (max_model_torque is set); pass "
+                "model_torque, the observer's filtered model torque h [N m]"
+            )
+        arr = np.asarray(
+            as_joint_array(value, self._n_dof, "model_torque", allow_nonfinite=True)[0]
+        )
+        if arr.shape[0] == 1 and len(shape) == 1:
+            arr = arr[0]
+        if arr.shape != shape:
+            raise DimensionError(f"model_torque must have shape {shape}; got {np.shape(value)}")
+        return arr
 
     # ------------------------------------------------------------ stream and batch
     def step(
-        self, state: AdapterState, r_hat: ArrayLike, qd: ArrayLike, trusted: ArrayLike
+        self,
+        state: AdapterState,
+        r_hat: ArrayLike,
+        qd: ArrayLike,
+        trusted: ArrayLike,
+        model_torque: ArrayLike | None = None,
     ) -> tuple[FloatArray, AdapterState]:
         """Correct one sample of the residual, and learn from it if it is trusted.
 
@@ -331,23 +408,41 @@ class FrictionAdapter:
             Joint velocities of this sample [rad/s], those the observer used.
         trusted : bool or array-like of bool of shape (n_dof,)
             Whether the sample may be learned from (all joints, or per joint).
+        model_torque : array-like of shape (n_dof,), optional
+            The observer's filtered model torque h of this sample [N m];
+            required with ``max_model_torque``, refused without it.
 
         Returns
         -------
         r_corrected : ndarray of shape (n_dof,)
-            r̂ − F(δτ) [N m].
+            r̂ − F(δτ) (− θ_h·h) [N m].
         state : AdapterState
         """
         state = self._check_state(state)
         r_arr, qd_arr = self._sample(r_hat, "r_hat"), self._sample(qd, "qd")
-        return self._step_checked(state, r_arr, qd_arr, _trusted(trusted, (self._n_dof,)))
+        h = self._model_torque(model_torque, (self._n_dof,))
+        return self._step_checked(state, r_arr, qd_arr, _trusted(trusted, (self._n_dof,)), h)
 
     def _step_checked(
-        self, state: AdapterState, r_hat: FloatArray, qd: FloatArray, trusted: BoolArray
+        self,
+        state: AdapterState,
+        r_hat: FloatArray,
+        qd: FloatArray,
+        trusted: BoolArray,
+        model_torque: FloatArray,
     ) -> tuple[FloatArray, AdapterState]:
         """:meth:`step` for arrays of shape (n_dof,) a caller has checked (the monitor)."""
         work = _Work(state)
-        out = self._advance(work, r_hat, qd, trusted)
+        if _kernel.compiled is None:
+            out = self._advance(work, r_hat, qd, trusted, model_torque)
+        else:
+            out = _kernel.run(
+                work,
+                (r_hat[None], qd[None], model_torque[None]),
+                trusted[None],
+                self._params,
+                self._scalars,
+            )[0]
         return out, work.freeze()
 
     def run(
@@ -356,6 +451,7 @@ class FrictionAdapter:
         qd: ArrayLike,
         trusted: ArrayLike,
         state: AdapterState | None = None,
+        model_torque: ArrayLike | None = None,
     ) -> tuple[FloatArray, AdapterState]:
         """Correct a whole residual; equal to :meth:`step` sample by sample.
 
@@ -370,11 +466,14 @@ class FrictionAdapter:
         state : AdapterState, optional
             State before the first sample; :meth:`initial_state` by default.
             Pass the returned state to continue with the next chunk.
+        model_torque : array-like of shape (n_samples, n_dof), optional
+            The observer's filtered model torque h [N m]; required with
+            ``max_model_torque``, refused without it.
 
         Returns
         -------
         r_corrected : ndarray of shape (n_samples, n_dof)
-            r̂ − F(δτ) [N m].
+            r̂ − F(δτ) (− θ_h·h) [N m].
         state : AdapterState
             State after the last sample.
         """
@@ -386,10 +485,15 @@ class FrictionAdapter:
                 f"qd must have the shape of r_hat {r_arr.shape}; got {qd_arr.shape}"
             )
         mask = _trusted(trusted, r_arr.shape)
-        out = np.empty_like(r_arr)
+        h = self._model_torque(model_torque, r_arr.shape)
         work = _Work(state)
+        if _kernel.compiled is not None:
+            return _kernel.run(
+                work, (r_arr, qd_arr, h), mask, self._params, self._scalars
+            ), work.freeze()
+        out = np.empty_like(r_arr)
         for k in range(r_arr.shape[0]):
-            out[k] = self._advance(work, r_arr[k], qd_arr[k], mask[k])
+            out[k] = self._advance(work, r_arr[k], qd_arr[k], mask[k], h[k])
         return out, work.freeze()
 
     # ------------------------------------------------------------ the kernel
@@ -404,27 +508,33 @@ class FrictionAdapter:
         return np.stack([np.tanh(qd / self._smooth_velocity), qd, np.ones_like(qd)], axis=-1)
 
     def _advance(
-        self, work: _Work, r_hat: FloatArray, qd: FloatArray, trusted: BoolArray
+        self, work: _Work, r_hat: FloatArray, qd: FloatArray, trusted: BoolArray, h: FloatArray
     ) -> FloatArray:
         """One sample: filters, output and (trusted joints) the RLS update, in place.
 
-        Nothing is written to ``work`` unless every new value is finite.
+        ``h`` is the model torque (zeros without that term). Nothing is
+        written to ``work`` unless every new value is finite.
         """
-        if not (np.isfinite(r_hat).all() and np.isfinite(qd).all()):
+        if not (np.isfinite(r_hat).all() and np.isfinite(qd).all() and np.isfinite(h).all()):
             return np.asarray(r_hat - work.filtered_correction)
         phi = self._regressor(qd)
         delta = np.clip(
-            np.einsum("nc,nc->n", phi, work.theta), -self._max_correction, self._max_correction
-        )
+            np.einsum("nc,nc->n", phi, work.theta[:, :3]),
+            -self._max_correction, self._max_correction,
+        )  # fmt: skip
         if not work.started:
             if np.isfinite(phi).all() and np.isfinite(delta).all():
                 work.regressor, work.correction, work.started = phi, delta, True
             return np.array(r_hat, dtype=float)
         pole, weight = self._pole, self._weight
-        psi = pole[:, None] * work.filtered_regressor + (weight * 0.5)[:, None] * (
+        psi = pole[:, None] * work.filtered_regressor[:, :3] + (weight * 0.5)[:, None] * (
             work.regressor + phi
         )
+        if self._columns == 4:
+            psi = np.concatenate([psi, h[:, None]], axis=1)
         filtered = pole * work.filtered_correction + weight * 0.5 * (work.correction + delta)
+        # θ_h·h with the θ_h learned up to the previous sample, as δτ.
+        model_part = work.theta[:, 3] * h if self._columns == 4 else 0.0
         theta, estimate, covariance, updated = self._learn(work, psi, r_hat, trusted)
         candidates = (psi, filtered, phi, delta, theta, estimate, covariance)
         if not all(np.isfinite(x).all() for x in candidates):
@@ -433,7 +543,7 @@ class FrictionAdapter:
         work.regressor, work.correction = phi, delta
         work.theta, work.estimate, work.covariance = theta, estimate, covariance
         work.updates = work.updates + updated
-        return np.asarray(r_hat - filtered)
+        return np.asarray(r_hat - filtered - model_part)
 
     def _learn(
         self, work: _Work, psi: FloatArray, r_hat: FloatArray, trusted: BoolArray
@@ -442,7 +552,7 @@ class FrictionAdapter:
 
         The estimate is plain RLS with forgetting and a bounded trace; the
         applied θ moves towards the estimate (clipped to the box) by at most
-        ``rate_limit``·dt in the norm |Δθ_c| + v_max|Δθ_v| + |Δθ_0|.
+        ``rate_limit``·dt in the norm |Δθ_c| + v_max|Δθ_v| + |Δθ_0| (+ h_max|Δθ_h|).
         """
         if not trusted.any():
             unchanged = np.zeros(self._n_dof, dtype=np.int64)

@@ -424,6 +424,7 @@ class MomentumObserver(_NominalObserver):
             gain=self.gain,
             kind=self.torque,
             robot=self.robot.name,
+            fingerprint=self.robot.fingerprint,
             position=q_arr,
             metadata=self.settings(),
         )

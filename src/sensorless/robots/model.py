@@ -37,6 +37,7 @@ from .builders import (
     model_from_table,
     model_from_urdf,
 )
+from .fingerprint import model_fingerprint
 from .inertia import (
     N_LINK_PARAMETERS,
     PARAMETER_NAMES,
@@ -249,6 +250,15 @@ class RobotModel:
     def effort_limits(self) -> FloatArray:
         """Joint torque limits [N m] (inf when unknown)."""
         return np.array(self.pinocchio_model.effortLimit)
+
+    @property
+    def fingerprint(self) -> str:
+        """Fingerprint of the dynamic parameters (:mod:`sensorless.robots.fingerprint`)."""
+        cached: str | None = getattr(self, "_fingerprint", None)
+        if cached is None:
+            cached = model_fingerprint(self.pinocchio_model, self.friction)
+            object.__setattr__(self, "_fingerprint", cached)
+        return cached
 
     @property
     def gravity_vector(self) -> FloatArray:

@@ -80,6 +80,8 @@ from .checks import (
     check_joints,
     check_runs,
     check_state,
+    other_model,
+    parameters_differ,
     robot_mismatch,
 )
 from .files import METHODS, load_threshold, save_threshold, threshold_from_dict, threshold_to_dict
@@ -127,6 +129,9 @@ class Threshold(abc.ABC):
     ------------------------------
     robot_ : str
         Robot name of the fit runs.
+    fingerprint_ : str
+        Fingerprint of the fit runs' nominal model (:mod:`sensorless.robots.fingerprint`);
+        empty when unknown (signals built by hand, files saved without it).
     kind_ : str
         Signal kind of the fit runs (``"motor"``, ``"joint"``, ``"acceleration"``).
     n_dof_ : int
@@ -146,6 +151,7 @@ class Threshold(abc.ABC):
     transient: Any
 
     robot_: str
+    fingerprint_: str = ""
     kind_: str
     n_dof_: int
     gain_: FloatArray
@@ -260,11 +266,16 @@ class Threshold(abc.ABC):
         self._fit(runs, keep, margin)
         steps = np.concatenate([np.diff(run.t) for run in runs])
         self.robot_ = first.robot
+        self.fingerprint_ = first.fingerprint
         self.kind_ = kind
         self.n_dof_ = first.n_dof
         self.gain_ = first.gain.copy()
         self.dt_ = float(np.median(steps)) if steps.size else float("nan")
         return self
+
+    def model_fingerprint(self, kind: str) -> str:
+        """Fingerprint of the nominal model of the fit runs of signal ``kind``."""
+        return self.fingerprint_
 
     def _check_fitted(self) -> None:
         if not hasattr(self, "n_dof_"):
@@ -300,10 +311,14 @@ class Threshold(abc.ABC):
             raise InputTypeError(
                 f"signals must be an ObserverSignals; got {type(signals).__name__}"
             )
-        if signals.n_dof != self.n_dof_ or signals.robot != self.robot_:
+        fingerprint = self.model_fingerprint(signals.kind)
+        if signals.n_dof != self.n_dof_ or other_model(
+            signals.robot, signals.fingerprint, self.robot_, fingerprint
+        ):
             raise robot_mismatch(
                 f"thresholds fitted for {self.robot_ or '<unnamed>'} ({self.n_dof_} joints); "
-                f"signals come from {signals.robot or '<unnamed>'} ({signals.n_dof} joints)",
+                f"signals come from {signals.robot or '<unnamed>'} ({signals.n_dof} joints)"
+                + parameters_differ(fingerprint, signals.fingerprint),
                 self.n_dof_,
                 signals.n_dof,
             )

@@ -42,6 +42,8 @@ __all__ = [
     "check_joints",
     "check_runs",
     "check_state",
+    "other_model",
+    "parameters_differ",
     "regular_period",
     "robot_mismatch",
 ]
@@ -104,12 +106,33 @@ def as_runs(signals: Any) -> list[ObserverSignals]:
     return list(runs)
 
 
+def other_model(name: str, fingerprint: str, other_name: str, other_fingerprint: str) -> bool:
+    """Whether two nominal models differ: by name, or by fingerprint when both are known.
+
+    An empty fingerprint (signals built by hand, a threshold file written
+    before fingerprints were saved) is compared by name only.
+    """
+    return name != other_name or bool(
+        fingerprint and other_fingerprint and fingerprint != other_fingerprint
+    )
+
+
+def parameters_differ(fingerprint: str, other_fingerprint: str) -> str:
+    """``"; the dynamic parameters differ (…)"`` when both fingerprints are known and differ."""
+    if fingerprint and other_fingerprint and fingerprint != other_fingerprint:
+        return (
+            f"; the dynamic parameters differ (fingerprints {fingerprint} and {other_fingerprint})"
+        )
+    return ""
+
+
 def robot_mismatch(message: str, expected_n_dof: int, n_dof: int) -> SensorlessError:
     """The error for signals of another robot model than expected, ``message`` first.
 
     Joint counts that differ are a :class:`DimensionError`; the same joint
-    count with another model (robot name: another robot, a payload, other
-    parameters) is a :class:`ModelMismatchError`.
+    count with another model (another robot name, or the same name with other
+    dynamic parameters: a payload, an identified set; see :func:`other_model`)
+    is a :class:`ModelMismatchError`.
     """
     if n_dof != expected_n_dof:
         return DimensionError(message)
@@ -130,10 +153,13 @@ def check_runs(runs: list[ObserverSignals]) -> None:
                 f"{what} has {run.t.shape[0]} sample(s); a fit needs at least 2 per run "
                 "(they define its sample period)"
             )
-        if run.n_dof != first.n_dof or run.robot != first.robot:
+        if run.n_dof != first.n_dof or other_model(
+            run.robot, run.fingerprint, first.robot, first.fingerprint
+        ):
             raise robot_mismatch(
                 f"all fit runs must come from one robot; run 0 is {first.robot!r} "
-                f"({first.n_dof} joints), {what} is {run.robot!r} ({run.n_dof} joints)",
+                f"({first.n_dof} joints), {what} is {run.robot!r} ({run.n_dof} joints)"
+                + parameters_differ(first.fingerprint, run.fingerprint),
                 first.n_dof,
                 run.n_dof,
             )

@@ -60,7 +60,7 @@ from .base import StreamBounds
 from .checks import check_runs, robot_mismatch
 from .fitting import BoolArray, stack
 from .state import ThresholdInputs, ThresholdState
-from .velocity_bins import BinTable, VelocityBinsThreshold, initial_friction
+from .velocity_bins import MIN_BIN_TIME, BinTable, VelocityBinsThreshold, initial_friction
 from .velocity_single import VelocityThreshold
 
 __all__ = [
@@ -140,6 +140,8 @@ def _check_pairs(motor: list[ObserverSignals], joint: list[ObserverSignals]) -> 
     check_runs(motor)
     check_runs(joint)
     m, s = motor[0], joint[0]
+    # By name only: the two observers use two nominal models of one robot by design (the
+    # motor side carries the rotor inertia as armature); each kind keeps its fingerprint.
     if m.n_dof != s.n_dof or m.robot != s.robot:
         raise robot_mismatch(
             f"motor and joint signals must come from one robot; the motor runs are {m.robot!r} "
@@ -234,6 +236,10 @@ class CombinedVelocityThreshold(VelocityBinsThreshold):
         Weights of the r̂ and r̂_s rows: equal (the thesis's single least
         squares), or the inverse mean square of each block's error in the
         equal-weight fit.
+    min_bin_time : float
+        Fit data [s] a bin needs for its own L and U, >= 0; a sparser bin
+        takes them over the nearest bins that together hold this much (see
+        :mod:`sensorless.thresholds.velocity_bins`). 0: no pooling.
     joints, transient
         As for every family, see :class:`~sensorless.thresholds.base.Threshold`.
 
@@ -254,10 +260,16 @@ class CombinedVelocityThreshold(VelocityBinsThreshold):
         L and U of r̂_s per bin and joint [N m] (include ``margin``).
     counts_ : ndarray of shape (n_bins, n_dof)
         Number of fit samples per bin and joint (the same for both
-        residuals); 0 marks a bin filled from the nearest visited one.
+        residuals); 0 marks a bin the fit runs never visited.
+    pooled_bins_ : ndarray of bool, shape (n_bins, n_dof)
+        Bins whose L and U are pooled (less than ``min_bin_time`` of fit
+        data); ``pooled_bins_.sum(axis=0)`` counts them per joint.
     weights_ : ndarray of shape (2, n_dof)
         Relative weight of the r̂ rows (row 0) and the r̂_s rows (row 1) in
         the fit of each joint [-]; columns sum to 1.
+    joint_fingerprint_ : str
+        Fingerprint of the nominal model of the r̂_s runs (``fingerprint_`` is
+        that of the r̂ runs; the motor side's model carries the rotor inertia).
 
     ``kind_`` is ``"motor+joint"``. :meth:`bounds` takes the residual from
     ``signals.kind``; streaming needs it: ``initial_state(..., kind="motor")``
@@ -284,7 +296,7 @@ class CombinedVelocityThreshold(VelocityBinsThreshold):
     True
     """
 
-    name = "velocity_combined"
+    name = "velocity-combined"
     _per_bin = (
         "tau_fme_",
         "tau_sfe_",
@@ -303,6 +315,7 @@ class CombinedVelocityThreshold(VelocityBinsThreshold):
     lower_joint_: FloatArray
     upper_joint_: FloatArray
     weights_: FloatArray
+    joint_fingerprint_: str = ""
 
     def __init__(
         self,
@@ -311,11 +324,17 @@ class CombinedVelocityThreshold(VelocityBinsThreshold):
         extrapolation_margin: float = 0.0,
         *,
         weighting: str = "equal",
+        min_bin_time: float = MIN_BIN_TIME,
         joints: Any = None,
         transient: float = 0.0,
     ) -> None:
         super().__init__(
-            bin_width, margin, extrapolation_margin, joints=joints, transient=transient
+            bin_width,
+            margin,
+            extrapolation_margin,
+            min_bin_time=min_bin_time,
+            joints=joints,
+            transient=transient,
         )
         self.weighting = weighting
 
@@ -375,7 +394,9 @@ class CombinedVelocityThreshold(VelocityBinsThreshold):
         motor, joint = _as_pairs(signals)
         _check_pairs(motor, joint)
         runs = [run for pair in zip(motor, joint, strict=True) for run in pair]
-        return self._fit_checked(runs, COMBINED_KIND)
+        self._fit_checked(runs, COMBINED_KIND)
+        self.joint_fingerprint_ = joint[0].fingerprint
+        return self
 
     def _fit(self, runs: list[ObserverSignals], keep: list[BoolArray], margin: FloatArray) -> None:
         """Fit on checked runs ordered motor, joint, motor, joint, ... (one mask per run)."""
@@ -404,10 +425,11 @@ class CombinedVelocityThreshold(VelocityBinsThreshold):
         self.bin_edges_ = grid.edges
         self.tau_fme_ = tau_fme
         self.tau_sfe_ = tau_sfe
+        least = self._fit_least(motor)
         self.lower_motor_, self.upper_motor_, self.counts_ = grid.bounds(
-            motor, gamma, tau_fme, margin
+            motor, gamma, tau_fme, margin, least
         )
-        self.lower_joint_, self.upper_joint_, _ = grid.bounds(joint, gamma, -tau_sfe, margin)
+        self.lower_joint_, self.upper_joint_, _ = grid.bounds(joint, gamma, -tau_sfe, margin, least)
         self.weights_ = weights
 
     # ----------------------------------------------------------------- one residual
@@ -429,6 +451,10 @@ class CombinedVelocityThreshold(VelocityBinsThreshold):
         else:
             tau, lower, upper = -self.tau_sfe_, self.lower_joint_, self.upper_joint_
         return BinTable(self.bin_edges_, self.gamma_, tau, lower, upper, self.counts_)
+
+    def model_fingerprint(self, kind: str) -> str:
+        """Fingerprint of the nominal model of the ``kind`` runs: "motor" or "joint"."""
+        return self.joint_fingerprint_ if kind == "joint" else self.fingerprint_
 
     def for_kind(self, kind: str) -> VelocityThreshold:
         """The fitted :class:`VelocityThreshold` of one residual.
@@ -454,10 +480,12 @@ class CombinedVelocityThreshold(VelocityBinsThreshold):
             self.bin_width,
             self.margin,
             self.extrapolation_margin,
+            min_bin_time=self.min_bin_time,
             joints=self.joints,
             transient=self.transient,
         )
         single.robot_ = self.robot_
+        single.fingerprint_ = self.model_fingerprint(kind)
         single.kind_ = kind
         single.n_dof_ = self.n_dof_
         single.gain_ = self.gain_.copy()

@@ -246,7 +246,7 @@ def test_cross_validation_leaves_the_threshold_alone() -> None:
     fitted = TimeVariantThreshold(margin=0.02).fit(train)
     before = fitted.to_dict()
     calibration = cross_validate(train, fitted)
-    assert fitted.to_dict() == before and calibration.method == "time_variant"
+    assert fitted.to_dict() == before and calibration.method == "time-variant"
 
 
 # ----------------------------------------------------------------------------- (c) warnings
@@ -355,7 +355,7 @@ def test_tune_attaches_the_calibration_and_sets_a_stated_rate(tiny_scenario) -> 
     threshold, _ = tune(logs, robot, "time-variant", margin=0.05)
     calibration = calibration_of(threshold)
     assert calibration is not None and calibration.fold_labels == ("run 1", "run 2")
-    assert calibration.stated is None and calibration.method == "time_variant"
+    assert calibration.stated is None and calibration.method == "time-variant"
     quick, _ = tune(logs, robot, "time-variant", margin=0.05, folds=None)
     assert calibration_of(quick) is None and np.allclose(quick.alpha_, threshold.alpha_)
     with pytest.raises(InputValueError, match="record more collision-free motion"):

@@ -64,10 +64,10 @@ def test_tune_detect_evaluate_round_trip(tmp_path) -> None:
         ["tune", "--method", "time-variant", str(free), "-o", str(thresholds), "--margin", "0.1"],
     )
     assert result.exit_code == 0, result.output
-    assert "method: time_variant" in thresholds.read_text()
+    assert "method: time-variant" in thresholds.read_text()
     result = runner.invoke(app, ["detect", str(hit), "--thresholds", str(thresholds)])
     assert result.exit_code == 0, result.output
-    assert "event(s) detected by time_variant" in result.output
+    assert "event(s) detected by time-variant" in result.output
     result = runner.invoke(app, ["evaluate", str(hit), "--thresholds", str(thresholds)])
     assert result.exit_code == 0, result.output
     assert "n_detected" in result.output

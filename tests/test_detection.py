@@ -75,7 +75,7 @@ FIT = run(0, 3000)
 FIT_RUNS = [FIT, run(100, 3000), run(101, 3000)]
 FAMILIES = {
     "constant": ConstantThreshold(margin=0.02).fit(FIT_RUNS),
-    "time_variant": TimeVariantThreshold(margin=0.02).fit(FIT_RUNS),
+    "time-variant": TimeVariantThreshold(margin=0.02).fit(FIT_RUNS),
     "velocity": VelocityThreshold(margin=0.03).fit(FIT_RUNS),
 }
 
@@ -300,7 +300,7 @@ def test_batch_rejects_time_that_does_not_increase() -> None:
 
 def test_result_tables() -> None:
     signals = run(11, 300, [(100, 120, 1, 5.0)])
-    result = Detector(FAMILIES["time_variant"]).run(signals)
+    result = Detector(FAMILIES["time-variant"]).run(signals)
     assert isinstance(result, DetectionResult)
     table = result.to_pandas()
     assert list(table.columns[:4]) == ["t", "valid", "residual_1", "residual_2"]
@@ -316,7 +316,7 @@ def test_result_tables() -> None:
         "method",
     ]
     assert events.loc[0, "duration"] == pytest.approx(0.02)
-    assert events.loc[0, "method"] == "time_variant"
+    assert events.loc[0, "method"] == "time-variant"
     empty = events_to_pandas([])
     assert isinstance(empty, pd.DataFrame) and empty.empty and "peak" in empty.columns
 

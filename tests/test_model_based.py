@@ -273,7 +273,7 @@ def test_save_load_round_trip(
     nominal, free, _ = data
     path = short_fit.save(tmp_path / "model_based.yaml")
     text = path.read_text(encoding="utf-8")
-    assert "method: model_based" in text and "b_fr_" in text and "standard_parameters" in text
+    assert "method: model" in text and "b_fr_" in text and "standard_parameters" in text
     loaded = load_threshold(path)
     assert isinstance(loaded, ModelBasedThreshold)
     for name in ("bq_", "theta_", "independent_", "btheta_", "b_fr_", "b_d_"):

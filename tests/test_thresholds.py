@@ -34,6 +34,7 @@ from sensorless.thresholds import (
     first_order_step,
     load_threshold,
 )
+from sensorless.thresholds.files import family_name
 
 DT = 1e-3
 GAIN = np.array([20.0, 25.0, 30.0])
@@ -336,7 +337,7 @@ def test_save_load_round_trip(method: str, tmp_path: Path) -> None:
     text = path.read_text()
     data = yaml.safe_load(text)
     assert text.startswith("# sensorless fitted threshold")
-    assert f"method: {th.name}" in text
+    assert f"method: {family_name(th)}" in text
     for name in th.to_dict()["attributes"]:
         assert f"{name}:" in text
     assert data["robot"] == "synthetic" and data["n_dof"] == N_DOF and data["kind"] == "motor"
@@ -352,7 +353,7 @@ def test_save_load_round_trip(method: str, tmp_path: Path) -> None:
 
 
 def test_registry_and_repr() -> None:
-    assert {"constant", "time_variant", "velocity"} <= set(METHODS)
+    assert {"constant", "time-variant", "velocity"} <= set(METHODS)
     assert METHODS["velocity"] is VelocityThreshold
     assert repr(VelocityThreshold(bin_width=0.1)).startswith("VelocityThreshold(bin_width=0.1")
 

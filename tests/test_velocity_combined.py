@@ -376,7 +376,7 @@ def test_save_load_round_trip(tmp_path: Path) -> None:
     path = th.save(tmp_path / "combined.yaml")
     text = path.read_text()
     data = yaml.safe_load(text)
-    assert "method: velocity_combined" in text
+    assert "method: velocity-combined" in text
     assert data["kind"] == "motor+joint" and data["n_dof"] == N_DOF
     assert data["params"]["weighting"] == "inverse_variance"
     for name in th.to_dict()["attributes"]:
@@ -394,7 +394,7 @@ def test_save_load_round_trip(tmp_path: Path) -> None:
 
 
 def test_registry_and_repr() -> None:
-    assert METHODS["velocity_combined"] is CombinedVelocityThreshold
+    assert METHODS["velocity-combined"] is CombinedVelocityThreshold
     assert METHODS["velocity"] is VelocityThreshold
     text = repr(CombinedVelocityThreshold(bin_width=0.1))
     assert text.startswith("CombinedVelocityThreshold(bin_width=0.1")
@@ -551,6 +551,6 @@ def test_bad_threshold_files_are_rejected() -> None:
     with pytest.raises(FileFormatError, match="lower_joint_: required key is missing"):
         CombinedVelocityThreshold.from_dict(data | {"attributes": missing})
     with pytest.raises(
-        InputValueError, match="holds a 'velocity_combined' threshold, not 'velocity'"
+        InputValueError, match="holds a 'velocity-combined' threshold, not 'velocity'"
     ):
         VelocityThreshold.from_dict(data)

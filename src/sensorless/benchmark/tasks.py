@@ -121,7 +121,7 @@ def _margin(
     reference = Detection("constant", "constant", kind, detection.oracle)
     constant, _ = tune(
         logs, _model(scenario, reference), "constant", ObserverSettings(kind=kind), folds=None,
-        joints=choice.joints,
+        joints=choice.joints, margin=0.0,
     )  # fmt: skip
     assert isinstance(constant, ConstantThreshold)
     return config.margin_fraction * constant.beta_

@@ -25,7 +25,14 @@ import pandas as pd
 import typer
 import yaml
 from rich.console import Console
-from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+from rich.progress import (
+    BarColumn,
+    Progress,
+    SpinnerColumn,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
 
 from .. import robots as robot_registry
 from ..exceptions import FileFormatError, InputValueError, ModelError, SensorlessError
@@ -44,6 +51,7 @@ __all__ = [
     "output_path",
     "print_table",
     "run_with_progress",
+    "run_with_spinner",
     "user_errors",
     "write_yaml",
 ]
@@ -150,6 +158,16 @@ def run_with_progress(
             progress.update(task, completed=done / total)
 
         return run(report)
+
+
+def run_with_spinner(label: str, run: Callable[[], R]) -> R:
+    """Run work of unknown length with a spinner and the elapsed time on the console."""
+    columns = (SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn())
+    with Progress(*columns, console=console, transient=False) as progress:
+        task = progress.add_task(label, total=None)
+        result = run()
+        progress.update(task, total=1.0, completed=1.0, description=f"{label}: done")
+        return result
 
 
 def nominal_robot(robot: str | None, log: Log | None, kind: str = "motor") -> RobotModel:

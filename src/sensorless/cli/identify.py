@@ -14,7 +14,14 @@ from ..identification.friction import identify_friction
 from ..identification.logs import identify_from_logs
 from ..io import read_log
 from ..report import write_report
-from ._common import console, nominal_robot, output_path, print_table, write_yaml
+from ._common import (
+    console,
+    nominal_robot,
+    output_path,
+    print_table,
+    run_with_spinner,
+    write_yaml,
+)
 
 __all__ = ["excite_command", "identify_friction_command", "identify_inertial_command"]
 
@@ -116,18 +123,29 @@ def excite_command(
     ] = 0.1,
     seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the random starts.")] = 0,
     iterations: Annotated[
-        int, typer.Option("--iterations", min=1, max=10_000, help="SLSQP iterations.")
+        int, typer.Option("--iterations", min=1, max=10_000, help="SLSQP iterations per start.")
     ] = 100,
+    restarts: Annotated[
+        int, typer.Option("--restarts", min=1, max=100, help="Random starts; the best is kept.")
+    ] = 3,
 ) -> None:
-    """Optimise a Fourier excitation trajectory (Swevers 1997) for the base regressor."""
+    """Optimise a Fourier excitation trajectory (Swevers 1997) for the base regressor.
+
+    The file's ``trajectory`` entry is a ``type: fourier`` trajectory that a
+    scenario file takes as its ``trajectory`` as it is.
+    """
     output_path(output, suffixes=(".yaml", ".yml"))
     model = nominal_robot(robot, None)
-    result = optimize_excitation(
-        model,
-        n_harmonics=harmonics,
-        base_frequency=frequency,
-        seed=seed,
-        max_iterations=iterations,
+    result = run_with_spinner(
+        f"excitation of {model.name}: {restarts} start(s) x {iterations} iterations",
+        lambda: optimize_excitation(
+            model,
+            n_harmonics=harmonics,
+            base_frequency=frequency,
+            seed=seed,
+            n_restarts=restarts,
+            max_iterations=iterations,
+        ),
     )
     path = result.to_yaml(output)
     print_table(result.to_pandas())

@@ -25,6 +25,7 @@ from ..monitor import (
 )
 from ..robots.base_parameters import base_parameters
 from ..simulation.scenario import available_scenarios, load_scenario
+from ..thresholds.files import family_name
 from ._common import console, nominal_robot, output_path, print_table, run_with_progress
 
 __all__ = [
@@ -94,9 +95,19 @@ def simulate_command(
     collisions: Annotated[
         bool, typer.Option("--collisions/--no-collisions", help="Include the contacts.")
     ] = True,
+    duration: Annotated[
+        float | None,
+        typer.Option(
+            "--duration",
+            min=0.001,
+            help="Simulated time [s] (default: the scenario's; random contacts scale with it).",
+        ),
+    ] = None,
 ) -> None:
     """Simulate a scenario and write its labelled log."""
     spec = load_scenario(scenario)
+    if duration is not None:
+        spec = spec.with_duration(duration)
     output_path(output, suffixes=(".parquet", ".pq", ".csv"))
     result = run_with_progress(
         f"simulating {spec.name}",
@@ -111,7 +122,11 @@ def simulate_command(
 def tune_command(
     logs: Annotated[list[Path], typer.Argument(help="Collision-free logs.")],
     method: Annotated[
-        str, typer.Option("--method", help="constant, time-variant, hysteretic, velocity or model.")
+        str,
+        typer.Option(
+            "--method",
+            help="constant, time-variant, hysteretic, velocity or model (model-based).",
+        ),
     ],
     output: Annotated[Path, typer.Option("-o", "--output", help="Thresholds file (YAML).")] = Path(
         "thresholds.yaml"
@@ -123,15 +138,30 @@ def tune_command(
     kind: Annotated[
         str | None, typer.Option("--kind", help="motor or joint (momentum methods).")
     ] = None,
+    margin_fraction: Annotated[
+        float | None,
+        typer.Option(
+            "--margin-fraction",
+            min=0.0,
+            help="Margin added to the bounds of each joint, as a fraction of the constant band "
+            "β_j = max |r_j| of the logs (default 0.1: 10 %).",
+        ),
+    ] = None,
     margin: Annotated[
         float | None,
-        typer.Option("--margin", help="Margin added to the bounds [N m] (default 0)."),
+        typer.Option(
+            "--margin",
+            min=0.0,
+            help="Margin added to the bounds [N m], the same on every joint "
+            "(instead of --margin-fraction).",
+        ),
     ] = None,
     false_alarm_rate: Annotated[
         float | None,
         typer.Option(
             "--false-alarm-rate",
-            help="Stated false alarms per hour for the robot: sets the margin (not with --margin).",
+            help="Stated false alarms per hour for the robot: sets the margin "
+            "(not with --margin or --margin-fraction).",
         ),
     ] = None,
     folds: Annotated[
@@ -152,10 +182,18 @@ def tune_command(
     options: dict[str, Any] = {} if margin is None else {"margin": margin}
     threshold, settings = tune(
         runs, nominal, method, settings, false_alarm_rate=false_alarm_rate, folds=folds_value,
-        **options,
+        margin_fraction=margin_fraction, **options,
     )  # fmt: skip
     path = save_tuned(output, threshold, settings)
-    console.print(f"wrote {path}: {threshold!r} fitted on {len(runs)} log(s) of {nominal.name}")
+    console.print(
+        f"wrote {path}: {family_name(threshold)} threshold fitted on {len(runs)} log(s) of "
+        f"{nominal.name}",
+        highlight=False,
+    )
+    margins = ", ".join(
+        f"{value:.3g}" for value in np.broadcast_to(threshold.margin, (nominal.n_dof,))
+    )
+    console.print(f"margin per joint [N m]: {margins}", highlight=False)
     calibration = calibration_of(threshold)
     if calibration is not None:
         for line in calibration.summary():
@@ -166,7 +204,7 @@ def _detect(log_path: Path, thresholds: Path, robot: str | None) -> tuple[Log, s
     log = read_log(log_path, allow_missing=True)  # lost samples: reported as fault spans
     threshold, settings = load_tuned(thresholds)
     monitor = CollisionMonitor(nominal_robot(robot, log, settings.kind), threshold, settings)
-    return log, threshold.name, monitor.process(log)
+    return log, family_name(threshold), monitor.process(log)
 
 
 def _print_faults(result: MonitorRun) -> None:

@@ -18,6 +18,7 @@ from ..exceptions import InputTypeError, InputValueError
 from ..signals import Event, ObserverSignals
 from ..thresholds.base import Threshold
 from ..thresholds.checks import as_inputs, as_samples, check_joints
+from ..thresholds.files import family_name
 from ..thresholds.state import ThresholdInputs
 from ._results import BoolArray, DetectionResult, DetectorState, Verdict, _merged
 
@@ -102,7 +103,7 @@ class Detector:
     def _close(self, event: Event | None) -> Event | None:
         if event is None or not _lasted(event.duration, self.min_duration):
             return None
-        return dataclasses.replace(event, method=self.threshold.name)
+        return dataclasses.replace(event, method=family_name(self.threshold))
 
     def _group(
         self, t: FloatArray, excursion: FloatArray, residual: FloatArray, monitored: tuple[int, ...]
@@ -192,7 +193,7 @@ class Detector:
             outside=outside,
             valid=valid,
             events=events,
-            method=threshold.name,
+            method=family_name(threshold),
             joints=joints,
             dt=dt,
         )

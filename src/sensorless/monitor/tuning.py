@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from .._validation import check_dt
+from .._validation import check_dt, check_scalar
 from ..exceptions import FileFormatError, InputTypeError, InputValueError, UnknownNameError
 from ..filters import Butterworth, CausalEstimator, DirtyDerivative, FiniteDifference
 from ..io import Log
@@ -34,7 +34,7 @@ from ..thresholds import (
     TimeVariantThreshold,
     VelocityThreshold,
 )
-from ..thresholds.files import threshold_from_dict
+from ..thresholds.files import OLD_NAMES, threshold_from_dict
 from .calibration import (
     DEFAULT_HOLD,
     DEFAULT_MIN_DURATION,
@@ -48,6 +48,7 @@ from .calibration import (
 from .policy import StreamPolicy
 
 __all__ = [
+    "DEFAULT_MARGIN_FRACTION",
     "METHOD_NAMES",
     "ObserverSettings",
     "load_tuned",
@@ -56,7 +57,8 @@ __all__ = [
     "tune",
 ]
 
-#: Threshold families by the names the CLI uses, with the observer each one watches.
+#: Threshold families by their one name (files, CLI, API, reports), with the observer each
+#: one watches.
 METHOD_NAMES: dict[str, str] = {
     "constant": "motor",
     "time-variant": "motor",
@@ -65,6 +67,9 @@ METHOD_NAMES: dict[str, str] = {
     "model": "acceleration",
 }
 _FILTERS = ("default", "finite_difference", "dirty_derivative", "butterworth")
+
+DEFAULT_MARGIN_FRACTION = 0.1
+"""Default margin of :func:`tune`: this fraction of the constant band β_j of each joint."""
 
 
 @dataclass(frozen=True)
@@ -149,8 +154,19 @@ class ObserverSettings:
         return cls(**data)
 
 
+def _check_method(method: Any) -> str:
+    if method in METHOD_NAMES:
+        return str(method)
+    renamed = OLD_NAMES.get(method) if isinstance(method, str) else None
+    hint = f" (the family is called {renamed!r})" if renamed in METHOD_NAMES else ""
+    raise UnknownNameError(
+        f"unknown threshold method {method!r}{hint}; options: {sorted(METHOD_NAMES)}"
+    )
+
+
 def make_threshold(method: str, robot: RobotModel, **options: Any) -> Threshold:
     """An unfitted threshold of the family ``method`` (one of :data:`METHOD_NAMES`)."""
+    method = _check_method(method)
     if method == "constant":
         return ConstantThreshold(**options)
     if method == "time-variant":
@@ -161,7 +177,7 @@ def make_threshold(method: str, robot: RobotModel, **options: Any) -> Threshold:
         return VelocityThreshold(**options)
     if method == "model":
         return ModelBasedThreshold(robot, **options)
-    raise UnknownNameError(f"unknown threshold method {method!r}; options: {sorted(METHOD_NAMES)}")
+    raise UnknownNameError(f"no threshold family for method {method!r}")  # pragma: no cover
 
 
 def _check_angles(logs: Sequence[Log], robot: RobotModel) -> None:
@@ -201,6 +217,7 @@ def tune(
     hold: float = DEFAULT_HOLD,
     confidence: float = 0.95,
     seed: int = 0,
+    margin_fraction: float | None = None,
     **options: Any,
 ) -> tuple[Threshold, ObserverSettings]:
     """Fit a threshold family on collision-free logs and say what false-alarm rate to expect.
@@ -231,8 +248,16 @@ def tune(
         Level of the intervals.
     seed : int
         Seed of the bootstrap behind the stated rate's interval.
+    margin_fraction : float, optional
+        Margin added to the fitted bounds of joint j, as a fraction of the
+        constant band β_j = max |r_j| of the same residual on the same samples
+        (eq. 5.32) [-]; :data:`DEFAULT_MARGIN_FRACTION` (10 %, the demo's)
+        when neither ``margin`` nor ``false_alarm_rate`` is given. Every
+        family then gets the same margin in N m, so none runs with margin 0.
     **options
         Hyper-parameters of the threshold (``margin``, ``joints``, ``transient``...).
+        ``margin`` [N m], a number or one per joint, is the absolute form (not
+        with ``margin_fraction``).
         ``transient`` [s], the start of each log left out of the fit, defaults to
         the observer's :meth:`ObserverSettings.settle_time`: a log that begins in
         motion starts with a residual excursion that is the observer's, not the
@@ -248,21 +273,29 @@ def tune(
     settings : ObserverSettings
         The settings used (save them with the threshold: :func:`save_tuned`).
     """
-    if method not in METHOD_NAMES:
-        raise UnknownNameError(
-            f"unknown threshold method {method!r}; options: {sorted(METHOD_NAMES)}"
-        )
+    method = _check_method(method)
     if isinstance(logs, Log):
         logs = [logs]  # one run
     if not isinstance(logs, Sequence) or not all(isinstance(log, Log) for log in logs):
         raise InputTypeError(f"logs must be a Log or a sequence of Logs; got {type(logs).__name__}")
     if not logs:
         raise InputValueError("tune needs at least one collision-free log")
-    if false_alarm_rate is not None and ("margin" in options or folds is None):
+    if false_alarm_rate is not None and (
+        "margin" in options or margin_fraction is not None or folds is None
+    ):
         raise InputValueError(
             "false_alarm_rate sets the margin from held-out folds: give no margin, and folds "
-            f"'runs' or an integer; got margin={options.get('margin')!r}, folds={folds!r}"
+            f"'runs' or an integer; got margin={options.get('margin')!r}, "
+            f"margin_fraction={margin_fraction!r}, folds={folds!r}"
         )
+    if margin_fraction is not None:
+        if "margin" in options:
+            raise InputValueError(
+                "give the margin as a fraction of the band (margin_fraction) or in N m "
+                f"(margin), not both; got margin_fraction={margin_fraction!r}, "
+                f"margin={options['margin']!r}"
+            )
+        margin_fraction = check_scalar(margin_fraction, "margin_fraction", "-", "nonnegative")
     settings = settings or ObserverSettings(kind=METHOD_NAMES[method])
     needed = METHOD_NAMES[method]
     if (needed == "acceleration") != (settings.kind == "acceleration"):
@@ -272,6 +305,9 @@ def tune(
     _check_angles(logs, robot)
     signals = [settings.observe(log, robot) for log in logs]
     options.setdefault("transient", settings.settle_time(signals[0].dt))
+    if false_alarm_rate is None and "margin" not in options:
+        fraction = DEFAULT_MARGIN_FRACTION if margin_fraction is None else margin_fraction
+        options["margin"] = _band_margin(signals, fraction, options)
     detector: dict[str, Any] = {"folds": folds, "min_duration": min_duration, "hold": hold}
     stated = None
     if false_alarm_rate is not None:
@@ -289,6 +325,16 @@ def tune(
     if stated is not None:
         calibration = with_stated(calibration, stated)
     return attach_calibration(threshold, calibration), settings
+
+
+def _band_margin(
+    signals: Sequence[ObserverSignals], fraction: float, options: dict[str, Any]
+) -> list[float]:
+    """``fraction`` × the constant band β_j of the residual, on the samples the fit uses [N m]."""
+    if fraction == 0.0:
+        return [0.0] * signals[0].residual.shape[1]
+    band = ConstantThreshold(joints=options.get("joints"), transient=options["transient"])
+    return [float(fraction * beta) for beta in band.fit(list(signals)).beta_]
 
 
 def save_tuned(path: str | Path, threshold: Threshold, settings: ObserverSettings) -> Path:

@@ -286,7 +286,7 @@ def tune_families(
     The time-variant and hysteretic families use the demo's minimax fit
     (as :func:`sensorless.comparison.compare`).
     """
-    base, _ = tune(logs, robot, "constant", folds=None)
+    base, _ = tune(logs, robot, "constant", folds=None, margin=0.0)
     assert isinstance(base, ConstantThreshold)  # what tune's "constant" makes
     margin = margin_fraction * base.beta_
     tuned = []

@@ -36,7 +36,13 @@ from ..io import write_log
 from ..io.file_schema import read_yaml_mapping
 from ..robots import load as load_robot
 from ..robots.model import RobotModel
-from ..trajectories import QuinticViaPoints, RandomPointToPoint, Trajectory, VelocitySweep
+from ..trajectories import (
+    FourierSeries,
+    QuinticViaPoints,
+    RandomPointToPoint,
+    Trajectory,
+    VelocitySweep,
+)
 from .collisions import Contact, ContactSet, HalfSine, Push, Recorded
 from .controllers import ComputedTorque, JointPID
 from .model_error import perturb, perturb_friction
@@ -425,9 +431,12 @@ def _trajectory(
         # against the robot's joint limits.
         sweep = {"home": [0.0] * robot.n_dof, **spec}
         return VelocitySweep.from_dict(sweep, position_limits=robot.position_limits)
+    if kind == "fourier":
+        # The series `sensorless excite` optimised over one period, repeated to the duration.
+        return FourierSeries.from_dict({**spec, "duration": duration})
     raise ModelError(
         f"unknown trajectory type {kind!r}; options: via_points, random_point_to_point, "
-        "velocity_sweep"
+        "velocity_sweep, fourier"
     )
 
 

@@ -103,7 +103,9 @@ if TYPE_CHECKING:
     Friction: TypeAlias = "str | LuGreFriction | CoulombFriction"
     Plant: TypeAlias = "RigidPlantSpec | FlexiblePlantSpec"
     Controller: TypeAlias = "PIDSpec | ComputedTorqueSpec"
-    Trajectory: TypeAlias = "ViaPointsSpec | RandomPointToPointSpec | VelocitySweepSpec"
+    Trajectory: TypeAlias = (
+        "ViaPointsSpec | RandomPointToPointSpec | VelocitySweepSpec | FourierSpec"
+    )
     Contact: TypeAlias = "HalfSineContact | PushContact | RecordedContact"
     JointNumbers: TypeAlias = int | list[int]
     JointSigns: TypeAlias = list[int]
@@ -381,6 +383,52 @@ class VelocitySweepSpec(FileModel):
         return self
 
 
+def _harmonics(rows: list[list[float]], info: ValidationInfo) -> list[list[float]]:
+    n_dof = context_n_dof(info)
+    width = len(rows[0]) if n_dof is None else n_dof
+    for k, row in enumerate(rows):
+        if len(row) != width:
+            raise ValueError(
+                f"expected one row of {width} numbers (one per joint) per harmonic; "
+                f"row {k} has {len(row)}"
+            )
+    return rows
+
+
+Harmonics = Annotated[list[list[float]], Field(min_length=1), AfterValidator(_harmonics)]
+
+
+class FourierSpec(FileModel):
+    """A finite Fourier series (thesis §2.4.3): the ``trajectory`` ``sensorless excite`` writes.
+
+    q_j(t) = offset_j + Σ_l a_lj/(ω l) sin(ω l t) − b_lj/(ω l) cos(ω l t),
+    ω = 2π base_frequency; periodic, it runs for the scenario's duration.
+    """
+
+    type: Literal["fourier"]
+    base_frequency: Positive = Field(description="Fundamental frequency [Hz].")
+    offset: JointPositions = Field(description="Offset q0 per joint [rad].")
+    a: Harmonics = Field(description="Sine coefficients [rad/s], one row per harmonic.")
+    b: Harmonics = Field(description="Cosine coefficients [rad/s], one row per harmonic.")
+    duration: Positive = absent(
+        "Period the series was optimised over [s]; the scenario's duration is simulated."
+    )
+
+    @model_validator(mode="after")
+    def _same_harmonics(self) -> FourierSpec:
+        if len(self.a) != len(self.b) or len(self.a[0]) != len(self.b[0]):
+            raise PydanticCustomError(
+                "harmonics",
+                "expected a and b of the same shape (harmonics, joints); got {a} and {b}",
+                {
+                    "field": "b",
+                    "a": f"{len(self.a)} x {len(self.a[0])}",
+                    "b": f"{len(self.b)} x {len(self.b[0])}",
+                },
+            )
+        return self
+
+
 if not TYPE_CHECKING:
     Trajectory = one_of(
         "trajectory",
@@ -388,9 +436,10 @@ if not TYPE_CHECKING:
             "via_points": ViaPointsSpec,
             "random_point_to_point": RandomPointToPointSpec,
             "velocity_sweep": VelocitySweepSpec,
+            "fourier": FourierSpec,
         },
         key="type",
-        expected="a mapping with type via_points, random_point_to_point or velocity_sweep",
+        expected="a mapping with type via_points, random_point_to_point, velocity_sweep or fourier",
     )
 
 

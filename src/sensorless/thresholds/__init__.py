@@ -10,12 +10,12 @@ reads them back.
 family                 name                   thesis
 =====================  =====================  ==========================================
 ConstantThreshold      ``"constant"``         ±β, eq. (5.32)
-TimeVariantThreshold   ``"time_variant"``     ±α + γ h + ε_fr f, eq. (5.33); -C·sign, (5.39)
+TimeVariantThreshold   ``"time-variant"``     ±α + γ h + ε_fr f, eq. (5.33); -C·sign, (5.39)
 VelocityThreshold      ``"velocity"``         LT/UT of eq. (4.35)-(4.39), fit eq. (4.45)
-ModelBasedThreshold    ``"model_based"``      ±B_c(t) of eq. (3.36) for τ̂_c (eq. 3.16)
+ModelBasedThreshold    ``"model"``            ±B_c(t) of eq. (3.36) for τ̂_c (eq. 3.16)
 =====================  =====================  ==========================================
 
-:class:`CombinedVelocityThreshold` (``"velocity_combined"``) fits the
+:class:`CombinedVelocityThreshold` (``"velocity-combined"``) fits the
 velocity-based bounds of r̂ and r̂_s together (eq. 4.47). Thresholds give
 bounds only; :class:`sensorless.detection.Detector` turns them into events.
 

@@ -28,6 +28,7 @@ from pydantic import (
     AllowInfNan,
     BaseModel,
     Field,
+    StringConstraints,
     ValidationInfo,
     create_model,
     model_validator,
@@ -80,13 +81,28 @@ else:
     Gains = joint_list(Annotated[float, AllowInfNan()])
 
 
+Fingerprint = Annotated[str, StringConstraints(pattern=r"^[0-9a-f]{16}$")]
+"""16 lower-case hexadecimal digits (:func:`sensorless.robots.fingerprint.model_fingerprint`)."""
+
+
 class ThresholdFile(FileModel):
     """What every fitted-threshold file holds besides its family's params and attributes."""
 
     format_version: int = version_field(THRESHOLD_FORMAT_VERSION, "threshold")
-    method: str = Field(description="Family name (checked against the registry by the reader).")
+    method: str = Field(
+        description="Family name: constant, time-variant, hysteretic, velocity, "
+        "velocity-combined or model (earlier files: time_variant, model_based, "
+        "velocity_combined; checked against the registry by the reader)."
+    )
     library_version: str = absent("Version of sensorless that wrote the file.")
     robot: str = Field(description="Robot name of the fit runs.")
+    fingerprint: Fingerprint | None = absent(
+        "Fingerprint of the fit runs' nominal model (sensorless.robots.fingerprint); "
+        "absent: the robot name alone identifies the model (files of earlier versions)."
+    )
+    joint_fingerprint: Fingerprint | None = absent(
+        "velocity-combined only: fingerprint of the nominal model of the r̂_s runs."
+    )
     kind: Literal["motor", "joint", "acceleration", "motor+joint"] = Field(
         description="Signal kind of the fit runs."
     )
@@ -183,6 +199,7 @@ PARAMETER_TYPES: dict[str, Any] = {
     "fit_method": Literal["least_squares", "minimax"],
     "max_lp_samples": Annotated[int, Field(ge=3)],
     "bin_width": Positive,
+    "min_bin_time": NonNegative,
     "extrapolation_margin": NonNegative,
     "weighting": Literal["equal", "inverse_variance"],
     "robot": Robot,
@@ -256,7 +273,7 @@ _ORDERED = {"upper_": "lower_", "upper_motor_": "lower_motor_", "upper_joint_": 
 _SIZERS = {"bin_edges_": "n_edges", "theta_": "n_base"}
 _UNDECLARED = Attribute(None, "finite")
 ATTRIBUTE_SELECTORS = ("form",)
-"""Hyper-parameters that choose which attributes a family has (``form`` of time_variant)."""
+"""Hyper-parameters that choose which attributes a family has (``form`` of time-variant)."""
 
 _SIGN_TEXT = {
     "finite": "finite numbers",

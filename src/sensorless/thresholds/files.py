@@ -8,6 +8,14 @@ attributes as (nested) lists. :func:`load_threshold` reads it back and
 dispatches on the method name through :data:`METHODS`, which every family
 joins by defining the class attribute ``name``.
 
+Every family has one name, the same in files, on the command line, in
+:func:`sensorless.tune` and in reports (:data:`FAMILY_NAMES`): ``constant``,
+``time-variant``, ``hysteretic`` (the time-variant family's form of eq. 5.39),
+``velocity``, ``velocity-combined`` and ``model`` (model-based). Files written
+before these names (``time_variant``, ``model_based``, ``velocity_combined``,
+and a hysteretic threshold saved as ``time_variant`` with ``params.form:
+hysteretic``) are still read (:data:`OLD_NAMES`).
+
 Reading checks the file against its declared format
 (:mod:`sensorless.thresholds.file_schema`) before anything is built: the
 envelope, the hyper-parameters of the family (those of its constructor) and
@@ -51,8 +59,12 @@ if TYPE_CHECKING:
     from .base import Threshold
 
 __all__ = [
+    "FAMILY_NAMES",
     "METHODS",
+    "OLD_NAMES",
     "THRESHOLD_FORMAT_VERSION",
+    "family_class",
+    "family_name",
     "load_threshold",
     "save_threshold",
     "threshold_from_dict",
@@ -60,21 +72,73 @@ __all__ = [
 ]
 
 METHODS: dict[str, type[Threshold]] = {}
-"""Threshold families by name (``"constant"``, ``"time_variant"``, ``"velocity"``, ...)."""
+"""Threshold classes by their class attribute ``name`` (filled as each family is defined)."""
+
+FAMILY_NAMES = ("constant", "time-variant", "hysteretic", "velocity", "velocity-combined", "model")
+"""The one name of each family: in files, on the command line, in the API and in reports."""
+
+OLD_NAMES: dict[str, str] = {
+    "time_variant": "time-variant",
+    "model_based": "model",
+    "velocity_combined": "velocity-combined",
+}
+"""Spellings of earlier files (and of the classes' ``name``), read as the family they meant."""
+
+_FORMS = {"hysteretic": ("time-variant", "hysteretic")}
+"""A family that is another family's form: (that family, its ``form``)."""
 
 _FILE_HEADER = (
     "# sensorless fitted threshold; read it with sensorless.thresholds.load_threshold(path)\n"
 )
 
 
-def _method_problem(method: Any) -> Problem | None:
-    if not isinstance(method, str) or method in METHODS:
+def _canonical(name: str) -> str:
+    return OLD_NAMES.get(name, name)
+
+
+def family_name(threshold: Threshold) -> str:
+    """The family's one name (:data:`FAMILY_NAMES`): ``"hysteretic"`` for that form, ...
+
+    Examples
+    --------
+    >>> from sensorless.thresholds import TimeVariantThreshold
+    >>> family_name(TimeVariantThreshold(form="hysteretic"))
+    'hysteretic'
+    """
+    name = _canonical(threshold.name)
+    for family, (parent, form) in _FORMS.items():
+        if name == parent and getattr(threshold, "form", None) == form:
+            return family
+    return name
+
+
+def family_class(method: str) -> type[Threshold] | None:
+    """The class of a family name (:data:`FAMILY_NAMES` or :data:`OLD_NAMES`); None if unknown."""
+    name = _canonical(method)
+    name = _FORMS.get(name, (name, ""))[0]
+    for cls in METHODS.values():
+        if _canonical(cls.name) == name:
+            return cls
+    return None
+
+
+def _method_problem(method: Any, params: Any) -> Problem | None:
+    if not isinstance(method, str):
         return None  # a missing or non-text method is the envelope's to report
-    hint = did_you_mean(method, sorted(METHODS))
+    if family_class(method) is not None:
+        form = _FORMS.get(method, (None, None))[1]
+        if form is not None and isinstance(params, dict) and params.get("form", form) != form:
+            return Problem(
+                ("params", "form"),
+                f"method {method!r} is the form {form!r}; got {params.get('form')!r}",
+            )
+        return None
+    valid = [name for name in FAMILY_NAMES if family_class(name) is not None]
+    hint = did_you_mean(method, valid)
     hint = hint if hint.startswith("; did you mean") else ""
-    valid = ", ".join(sorted(METHODS))
     return Problem(
-        ("method",), f"unknown threshold method {method!r}{hint}; valid methods: {valid}"
+        ("method",),
+        f"unknown threshold method {method!r}{hint}; valid methods: {', '.join(valid)}",
     )
 
 
@@ -96,19 +160,27 @@ def threshold_to_dict(threshold: Threshold) -> dict[str, Any]:
     threshold._check_fitted()
     return {
         "format_version": THRESHOLD_FORMAT_VERSION,
-        "method": threshold.name,
+        "method": family_name(threshold),
         "library_version": __version__,
         "robot": threshold.robot_,
         "kind": threshold.kind_,
         "n_dof": int(threshold.n_dof_),
         "gain": threshold.gain_.tolist(),
         "dt": float(threshold.dt_),
+        **_fingerprints(threshold),
         "params": {k: _to_builtin(v) for k, v in threshold.get_params().items()},
         "attributes": {
             name: np.asarray(getattr(threshold, name)).tolist()
             for name in threshold._attribute_names()
         },
     }
+
+
+def _fingerprints(threshold: Threshold) -> dict[str, str]:
+    """The model fingerprints a fitted threshold knows (none for hand-made signals)."""
+    found = {"fingerprint": threshold.fingerprint_}
+    found["joint_fingerprint"] = getattr(threshold, "joint_fingerprint_", "")
+    return {key: value for key, value in found.items() if value}
 
 
 def _checked(data: Any, source: str) -> tuple[ThresholdFile, type[Threshold]]:
@@ -126,11 +198,14 @@ def _checked(data: Any, source: str) -> tuple[ThresholdFile, type[Threshold]]:
     except ValidationError as exc:
         problems += problems_of(exc, ThresholdFile)
     method, params = data.get("method"), data.get("params")
-    unknown = _method_problem(method)
+    unknown = _method_problem(method, params)
     if unknown is not None:
         problems.insert(0, unknown)
-    family = METHODS.get(method) if isinstance(method, str) else None
+    family = family_class(method) if isinstance(method, str) else None
     if family is not None and isinstance(params, dict):
+        form = _FORMS.get(str(method), (None, None))[1]
+        if form is not None:  # a form named by the method may leave params.form out
+            params = {**params, "form": params.get("form", form)}
         model = params_model(family)
         try:
             model.model_validate(params, context=context)
@@ -170,10 +245,18 @@ def threshold_from_dict(
     envelope, family = _checked(data, source)
     if expected is not None and not issubclass(family, expected):
         raise InputValueError(
-            f"the description holds a {family.name!r} threshold, not {expected.name!r}"
+            f"the description holds a {_canonical(family.name)!r} threshold, "
+            f"not {_canonical(expected.name)!r}"
         )
-    threshold = family(**dict(data["params"]))
+    params = dict(data["params"])
+    form = _FORMS.get(str(data["method"]), (None, None))[1]
+    if form is not None:
+        params.setdefault("form", form)
+    threshold = family(**params)
     threshold.robot_ = envelope.robot
+    threshold.fingerprint_ = envelope.fingerprint or ""
+    if envelope.joint_fingerprint is not None:
+        threshold.joint_fingerprint_ = envelope.joint_fingerprint  # type: ignore[attr-defined]
     threshold.kind_ = envelope.kind
     threshold.n_dof_ = envelope.n_dof
     threshold.gain_ = np.asarray(envelope.gain, dtype=np.float64)

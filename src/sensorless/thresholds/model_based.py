@@ -156,7 +156,7 @@ class ModelBasedThreshold(Threshold):
     True
     """
 
-    name = "model_based"
+    name = "model"
     _integer_attributes = ("independent_",)
 
     bq_: FloatArray

@@ -92,7 +92,7 @@ class TimeVariantThreshold(Threshold):
         Constant threshold β of eq. (5.32) on the same samples [N m] (includes ``margin``).
     """
 
-    name = "time_variant"
+    name = "time-variant"
 
     alpha_: FloatArray
     gamma_: FloatArray

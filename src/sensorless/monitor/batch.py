@@ -23,7 +23,6 @@ from ..detection import TIME_TOLERANCE
 from ..exceptions import InputValueError
 from ..io import Log
 from ..signals import Event, ObserverSignals
-from ..thresholds.files import family_name
 
 if TYPE_CHECKING:
     from ._fused import FusedStream
@@ -190,7 +189,7 @@ def _run_fused(
     tau_j = np.ascontiguousarray(log.tau_j if sensed else log.tau_m, dtype=np.float64)
     # The joint-torque stream checks the motor torques' limits too, when the log has them.
     tau_m = tau_j if log.tau_m is None else np.ascontiguousarray(log.tau_m, dtype=np.float64)
-    codes, series, events = fused.block(t, (q, qd, tau_m, tau_j), family_name(monitor.threshold))
+    codes, series, events = fused.block(t, (q, qd, tau_m, tau_j), monitor._method)
     status = codes & 15
     bad = status >= fused.FAULT
     settling = status == fused.SETTLING

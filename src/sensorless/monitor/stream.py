@@ -161,6 +161,7 @@ class CollisionMonitor:
             )
         self.robot = robot
         self.threshold = threshold
+        self._method = family_name(threshold)  # the events' label, once (not per sample)
         self.settings = settings
         self.policy = policy or StreamPolicy()
         tuned = check_dt(threshold.dt_)
@@ -373,7 +374,7 @@ class CollisionMonitor:
         out = np.empty((3, n))
         sample = (q_arr, qd_arr, tau_arr, sensed)
         try:
-            status, joints, event = fused.run(time, sample, out, family_name(self.threshold))
+            status, joints, event = fused.run(time, sample, out, self._method)
         except Exception as exc:  # fail-safe: no data may crash the stream
             return self._fault(time, f"the sample could not be processed: {exc!r}")
         if status in _STATUSES:
@@ -557,7 +558,7 @@ class CollisionMonitor:
     def finish(self) -> Event | None:
         """Close the stream: the event still open, if any."""
         if self._fused is not None:
-            return self._fused.finish(family_name(self.threshold))
+            return self._fused.finish(self._method)
         stream = self._stream
         if stream is None or stream.detector is None:
             return None

@@ -5,13 +5,16 @@ from __future__ import annotations
 import math
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
 from sensorless.cli import app, demo
 from sensorless.comparison import REAL_ARM_HEADING, compare, real_arm, write_comparison_report
+from sensorless.comparison.runs import _jobs, _submit_runs
 from sensorless.exceptions import InputValueError
 from sensorless.monitor import poisson_interval
 from sensorless.realarm import DEFAULT_FAMILIES
@@ -155,3 +158,45 @@ def test_demo_ends_with_the_real_arm_section(tmp_path, monkeypatch, present) -> 
     else:
         assert "Real arm (UR10): skipped." in " ".join(result.output.split())
         assert "<p>Skipped: " in body and "<table" not in body
+
+
+def test_compare_on_dask_equals_serial_and_reuses_runs_submitted_ahead() -> None:
+    """The runs as Dask tasks give the serial run's logs, hence its bounds and tables.
+
+    Runs submitted before :func:`compare` (as the demo does) are found by their keys: the
+    client holds no key beyond them afterwards.
+    """
+    distributed = pytest.importorskip("distributed")
+    scenario = load_scenario("panda-gaz").with_duration(3.0)
+    options: dict[str, Any] = {
+        "methods": ("constant", "velocity"),
+        "n_tuning": 1,
+        "master_seed": 11,
+        "joints": (1, 2),
+    }
+    serial = compare(scenario, **options)
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        ahead = _submit_runs(client, _jobs(scenario, 1, 11)[1])
+        parallel = compare(scenario, scheduler=client, **options)
+        assert set(client.futures) == {future.key for future in ahead}
+        assert len(ahead) == 2 and all(future.status == "finished" for future in ahead)
+    for name in ("q", "tau_m", "tau_ext"):
+        np.testing.assert_array_equal(
+            getattr(serial.test_log, name), getattr(parallel.test_log, name)
+        )
+    for label in serial.bounds:
+        np.testing.assert_array_equal(serial.bounds[label][0], parallel.bounds[label][0])
+        np.testing.assert_array_equal(serial.bounds[label][1], parallel.bounds[label][1])
+    pd.testing.assert_frame_equal(serial.summary(), parallel.summary())
+    assert serial.seeds == parallel.seeds
+
+
+def test_compare_rejects_an_unknown_scheduler() -> None:
+    scenario = load_scenario("panda-gaz").with_duration(1.0)
+    with pytest.raises(InputValueError, match="scheduler must be None, 'local'"):
+        compare(scenario, scheduler="nowhere")

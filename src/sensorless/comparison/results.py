@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from .._validation import FloatArray
 from ..evaluation import Evaluation, comparison_table, efficiency_table, summary_table
 from ..io import Log
 from ..report import (
@@ -20,8 +21,6 @@ from ..thresholds import (
     Threshold,
     TimeVariantThreshold,
 )
-
-FloatArray = np.ndarray
 
 
 @dataclass

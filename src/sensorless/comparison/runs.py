@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from .._validation import FloatArray
 from ..detection import Detector
 from ..evaluation import Evaluation, evaluate
 from ..exceptions import InputValueError
@@ -25,8 +26,6 @@ from ..thresholds import (
     Threshold,
 )
 from .results import Comparison
-
-FloatArray = np.ndarray
 
 Job = tuple[Scenario, int, bool]
 """One simulated run of :func:`compare`: scenario, run seed, contacts on."""

@@ -16,6 +16,8 @@ import pytest
 
 from sensorless import _validation
 from sensorless.monitor import CollisionMonitor, tune
+from sensorless.monitor import stream as stream_module
+from sensorless.robots.recursion import numba_available
 from sensorless.simulation.scenario import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -51,19 +53,29 @@ def test_the_log_path_converts_once(monitor_and_log, backend) -> None:
     assert _calls(_validation.as_joint_array, lambda: monitor.run(log)) == expected
 
 
-def test_a_stream_step_converts_each_input_once(monitor_and_log) -> None:
+@pytest.mark.parametrize("backend", ["python", "numba"])
+def test_a_stream_step_converts_each_input_once(monitor_and_log, backend, monkeypatch) -> None:
     monitor, log = monitor_and_log
-    monitor.reset()
+    if backend == "numba" and not numba_available():
+        pytest.skip("numba is not installed")
+    monitor = CollisionMonitor(monitor.robot, monitor.threshold, monitor.settings, backend=backend)
     for k in range(400):  # past the settling window: the whole pipeline runs
         monitor.step(log.t[k], log.q[k], log.tau_m[k])
 
     def one_step() -> None:
         monitor.step(log.t[400], log.q[400], log.tau_m[400])
 
-    assert _calls(_validation.as_sample, one_step) == 2  # q and tau_m
-    monitor.reset()
-    for k in range(400):
-        monitor.step(log.t[k], log.q[k], log.tau_m[k])
+    # The Python path converts with as_sample; the compiled one inline, with the same call.
+    conversions: list[object] = []
+
+    def counted(x: object, dtype: object) -> np.ndarray:
+        conversions.append(x)
+        return np.ascontiguousarray(x, dtype=dtype)
+
+    monkeypatch.setattr(stream_module, "_contiguous", counted)
+    as_sample_calls = _calls(_validation.as_sample, one_step)
+    assert as_sample_calls + len(conversions) == 2  # q and tau_m
+    assert as_sample_calls == (2 if backend == "python" else 0)
     assert _calls(_validation.as_joint_array, one_step) == 0
 
 

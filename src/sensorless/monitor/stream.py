@@ -362,23 +362,31 @@ class CollisionMonitor:
     ) -> Verdict:
         """:meth:`step` for a finite time, on the compiled path (which checks the floor)."""
         n = self._n_dof
-        q_arr, message = as_sample(q, n, "q")
-        qd_arr, message_v = (_EMPTY, "") if qd is None else as_sample(qd, n, "qd")
-        tau_arr, message_m = as_sample(tau_m, n, "tau_m")
-        sensed, message_j = as_sample(tau_j, n, "tau_j") if self._joint else (tau_arr, "")
-        if message or message_v or message_m or message_j:  # the Python rules say which
-            if time <= fused.floor:
-                return self._fault(time, self._back_message(time, fused.floor))
-            fused.refuse(time)
-            return self._fault(time, self._sample(q, qd, tau_m, tau_j)[3])
-        out = np.empty((3, n))
-        sample = (q_arr, qd_arr, tau_arr, sensed)
+        try:  # as_sample's conversion, inline: this path runs once per sample
+            q_arr, tau_arr = _contiguous(q, _FLOAT), _contiguous(tau_m, _FLOAT)
+            common = qd is None and not self._joint and q_arr.shape == tau_arr.shape == (n,)
+        except (TypeError, ValueError, OverflowError):
+            common = False
+        if common:
+            sample = (q_arr, _EMPTY, tau_arr, tau_arr)
+        else:
+            q_arr, message = as_sample(q, n, "q")
+            qd_arr, message_v = (_EMPTY, "") if qd is None else as_sample(qd, n, "qd")
+            tau_arr, message_m = as_sample(tau_m, n, "tau_m")
+            sensed, message_j = as_sample(tau_j, n, "tau_j") if self._joint else (tau_arr, "")
+            if message or message_v or message_m or message_j:  # the Python rules say which
+                if time <= fused.floor:
+                    return self._fault(time, self._back_message(time, fused.floor))
+                fused.refuse(time)
+                return self._fault(time, self._sample(q, qd, tau_m, tau_j)[3])
+            sample = (q_arr, qd_arr, tau_arr, sensed)
+        out = _empty((3, n))
         try:
             status, joints, event = fused.run(time, sample, out, self._method)
         except Exception as exc:  # fail-safe: no data may crash the stream
             return self._fault(time, f"the sample could not be processed: {exc!r}")
         if status in _STATUSES:
-            return Verdict(cast(Any, status), time, joints, out[0], out[1], out[2], event)
+            return Verdict._of_rows(cast(Any, status), time, joints, out, event)
         return self._fault(time, self._fused_fault(fused, status, time, sample))
 
     def _fused_fault(
@@ -572,6 +580,8 @@ class CollisionMonitor:
 
 
 _EMPTY = np.empty(0)
+_FLOAT = np.dtype(np.float64)
+_contiguous, _empty = np.ascontiguousarray, np.empty
 
 
 def _with(verdict: Verdict, status: Any, event: Event | None) -> Verdict:

@@ -8,9 +8,12 @@ with the same arithmetic: the time and value rules of :mod:`.policy`; the
 velocity cascade of the ``CausalEstimator`` (``_step_outputs``); p, Cᵀq̇ and
 g by the O(n) recursion (``terms_at`` of :mod:`sensorless.robots._recursion_numba`)
 and the update of ``MomentumObserver._step_checked``; after the settling
-window, the bounds of the constant, time-variant (forms "friction" and
-"hysteretic") and velocity-based thresholds (their ``_process_checked``), the
-events of ``Detector._step_checked`` and the latch. The new state is written
+window, the drift adapter when the monitor has one
+(``FrictionAdapter._step_checked``, by ``advance_rows`` of
+:mod:`sensorless.observers._adaptive_kernel`), the bounds of the constant,
+time-variant (forms "friction" and "hysteretic") and velocity-based
+thresholds (their ``_process_checked``), the events of
+``Detector._step_checked`` and the latch. The new state is written
 to scratch rows and committed only when the sample was good from end to end:
 a fault changes nothing but the time of the last refused sample (``PENDING``,
 the gap rule's memory). Joints travel as bit masks (bit j: joint j + 1).
@@ -20,16 +23,18 @@ Two flat float64 arrays per stream (packed by :class:`~sensorless.monitor._fused
 sliced into views by the kernel, since each array argument costs about 0.1 µs per call:
 
 ``model`` (read-only)
-    The header (``DT`` … ``TABLE_AT``); the velocity sections (n_sections × 6)
+    The header (``DT`` … ``GUARD``); the velocity sections (n_sections × 6)
     and their unit initial states (n_sections × 2); the velocity bin edges
     [rad/s]; ``const`` (n_dof, ``N_CONST``): per joint ``kernel_constants`` of
     the recursion (columns 0–27), then the columns named below; ``table``
-    (3, n_bins, n_dof): τ̂_fme, L and U of the velocity-based threshold [N m].
+    (3, n_bins, n_dof): τ̂_fme, L and U of the velocity-based threshold [N m];
+    the drift adapter's parameters, if any (see ``_adapter_parts``).
 ``buffers``
     ``flags`` (3, ``N_FLAGS``): committed (0) and scratch (1) scalars, and the
     event that closed at the sample (2); ``state`` (2, n_rows, n_dof):
     committed and scratch rows, the estimator's section states from row
-    ``SECTIONS`` on; ``work`` (n_dof, 23): scratch of ``terms_at``.
+    ``SECTIONS`` on; ``work`` (n_dof, 23): scratch of ``terms_at``; with a
+    drift adapter, its committed and scratch state and its temporaries.
 """
 
 from __future__ import annotations
@@ -41,6 +46,7 @@ import numpy as np
 from numba import njit, types
 
 from .._validation import FloatArray
+from ..observers._adaptive_kernel import compiled_rows as adapter_rows
 from ..robots._recursion_numba import terms_at
 
 __all__ = ["BLOCK_SIGNATURE", "REASONS", "SIGNATURE", "STATUSES", "fused_block", "fused_step"]
@@ -48,7 +54,8 @@ __all__ = ["BLOCK_SIGNATURE", "REASONS", "SIGNATURE", "STATUSES", "fused_block",
 # model header
 DT, EARLY, GAP, SETTLE, RELEASE, MIN_DURATION, HOLD, JOINT = range(8)
 FRICTION, FAMILY, EXTRA, N_SECTIONS, N_EDGES, CONST_AT, TABLE_AT = range(8, 15)
-HEADER = 15
+ADAPT_AT, ADAPT_STATE, ADAPT_SIZE, GUARD = range(15, 19)  # drift adaptation; ADAPT_AT 0: none
+HEADER = 19
 # const columns after the recursion's 28; FRICTION_PARAMETERS has five
 CENTRE, HALF_RANGE, SPEED_LIMIT, TORQUE_LIMIT, POLE, WEIGHT, FRICTION_PARAMETERS = range(28, 35)
 MONITORED, WIDTH, GAMMA, COEFFICIENT, BIN_POLE, BIN_WEIGHT = range(39, 45)
@@ -59,8 +66,9 @@ RESIDUAL, MODEL_TORQUE, FILTERED_FRICTION, FILTERED_SIGN = range(5, 9)
 BIN_STATE, VELOCITY, TERMS, SECTIONS = 9, 10, 11, 14
 # flags; row 2 holds a closed event in the OPEN... fields
 HAS_STREAM, START, T_LAST, FLOOR, PENDING, LATCHED, INSIDE_SINCE, HAS_DETECTOR = range(8)
-OUTSIDE, OPEN, OPEN_START, OPEN_END, OPEN_JOINTS, OPEN_PEAK, OPEN_PEAK_RESIDUAL = range(8, 15)
-N_FLAGS = 15
+QUIET_FROM = 8  # the drift adapter may learn from this time on [s]
+OUTSIDE, OPEN, OPEN_START, OPEN_END, OPEN_JOINTS, OPEN_PEAK, OPEN_PEAK_RESIDUAL = range(9, 16)
+N_FLAGS = 16
 # friction kinds, threshold families
 NO_FRICTION, COULOMB, VISCOUS, COULOMB_VISCOUS, STRIBECK, SIGMOID, HYSTERETIC = range(7)
 CONSTANT, TIME_VARIANT, HYSTERETIC_FORM, VELOCITY_BINS = range(4)
@@ -340,16 +348,95 @@ def _detect(
 
 
 @njit(cache=True)
+def _adapter_parts(model: FloatArray, region: FloatArray, n: int) -> Any:
+    """The drift adapter's parameters (read from ``model``) and state (views of ``region``).
+
+    At ``model[ADAPT_AT]``: λ, max_trace and the number of columns m (the
+    ``scalars`` of the adapter), then pole, weight, v_s, max_correction and
+    rate·dt (n each), the norm weights and the box (n × m each). ``region``
+    (one copy of the state): θ and the RLS estimate (n × m each), P
+    (n × m × m), φ (n × 3), ψ (n × m), δτ, F(δτ), the update counts (n each)
+    and the started flag. These are the arguments of
+    :func:`sensorless.observers._adaptive_kernel.advance_block`.
+    """
+    at = int(model[ADAPT_AT])
+    m = int(model[at + 2])
+    scalars = model[at : at + 3]
+    p = at + 3
+    pole, weight, v_s = model[p : p + n], model[p + n : p + 2 * n], model[p + 2 * n : p + 3 * n]
+    max_corr, step_bound = model[p + 3 * n : p + 4 * n], model[p + 4 * n : p + 5 * n]
+    p += 5 * n
+    norm_w = model[p : p + n * m].reshape((n, m))
+    box = model[p + n * m : p + 2 * n * m].reshape((n, m))
+    theta = region[: n * m].reshape((n, m))
+    estimate = region[n * m : 2 * n * m].reshape((n, m))
+    r = 2 * n * m
+    cov = region[r : r + n * m * m].reshape((n, m, m))
+    r += n * m * m
+    reg = region[r : r + 3 * n].reshape((n, 3))
+    freg = region[r + 3 * n : r + (3 + m) * n].reshape((n, m))
+    r += (3 + m) * n
+    corr, fcorr = region[r : r + n], region[r + n : r + 2 * n]
+    updates, started = region[r + 2 * n : r + 3 * n], region[r + 3 * n : r + 3 * n + 1]
+    state = (theta, estimate, cov, reg, freg, corr, fcorr)
+    params = (pole, weight, v_s, max_corr, norm_w, box, step_bound)
+    return state, started, updates, params, scalars
+
+
+@njit(cache=True)
+def _adapter_restart(model: FloatArray, region: FloatArray, n: int) -> None:
+    """``FrictionAdapter.restart`` in place: φ, ψ, δτ, F(δτ) and the started flag to zero."""
+    if model[ADAPT_AT] == 0.0:
+        return
+    state, started, _, _, _ = _adapter_parts(model, region, n)
+    _, _, _, reg, freg, corr, fcorr = state
+    _copy(np.zeros(reg.shape), reg)
+    _copy(np.zeros(freg.shape), freg)
+    corr[:] = 0.0
+    fcorr[:] = 0.0
+    started[0] = 0.0
+
+
+@njit(cache=True)
+def _adapt(model: FloatArray, region: Any, rows: Any, trusted: bool, out: Any) -> None:
+    """The drift adapter on this sample: the corrected residual into ``out[0]``.
+
+    ``FrictionAdapter._step_checked`` on the observer's r̂, the velocity
+    and the filtered model torque h of ``rows``, learning only if ``trusted``;
+    ``region`` is (the scratch copy of the adapter's state, the temporaries
+    of ``advance_rows``).
+    """
+    n = rows.shape[1]
+    state, started, updates, params, scalars = _adapter_parts(model, region[0], n)
+    trust = np.full((1, n), trusted)
+    adapter_rows(
+        rows[RESIDUAL : RESIDUAL + 1], rows[VELOCITY : VELOCITY + 1],
+        rows[MODEL_TORQUE : MODEL_TORQUE + 1], trust, state, started, updates, params,
+        scalars, out[0:1], region[1],
+    )  # fmt: skip
+
+
+@njit(cache=True)
 def _views(model: FloatArray, buffers: FloatArray, n: int) -> Any:
-    """``const``, ``table``, ``flags``, ``state`` and ``work``: views of the two flat arrays."""
+    """``const``, ``table``, ``flags``, ``state``, ``work``, ``adapter``: views of the two arrays.
+
+    ``adapter``: the drift adapter's committed state, its scratch state and
+    the temporaries of ``advance_rows``, all empty without adaptation (see
+    :func:`_adapt`).
+    """
     n_rows = SECTIONS + 2 * int(model[N_SECTIONS])
     table_at = int(model[TABLE_AT])
     const = model[int(model[CONST_AT]) : table_at].reshape((n, N_CONST))
-    table = model[table_at:].reshape((3, (model.shape[0] - table_at) // (3 * n), n))
+    table_end = int(model[ADAPT_AT]) if model[ADAPT_AT] > 0.0 else model.shape[0]
+    table = model[table_at:table_end].reshape((3, (table_end - table_at) // (3 * n), n))
     flags = buffers[: 3 * N_FLAGS].reshape((3, N_FLAGS))
     end = 3 * N_FLAGS + 2 * n_rows * n
     state = buffers[3 * N_FLAGS : end].reshape((2, n_rows, n))
-    return const, table, flags, state, buffers[end:].reshape((n, 23))
+    size = int(model[ADAPT_SIZE])
+    adapter_at = int(model[ADAPT_STATE])
+    region = buffers[adapter_at:]
+    adapter = (region[:size], region[size : 2 * size], region[2 * size :])
+    return const, table, flags, state, buffers[end : end + 23 * n].reshape((n, 23)), adapter
 
 
 @njit(cache=True)
@@ -371,15 +458,14 @@ def fused_step(
     the estimate. ``out`` (3, n_dof) receives the residual and the bounds
     [N m] (NaN bounds while settling).
     """
-    const, table, flags, state, work = _views(model, buffers, q.shape[0])
-    return _step(time, (q, qd, tau_m, tau_j), model, (const, table, flags, state, work), out)
+    return _step(time, (q, qd, tau_m, tau_j), model, _views(model, buffers, q.shape[0]), out)
 
 
 @njit(cache=True)
 def _step(time: float, sample: Any, model: FloatArray, views: Any, out: FloatArray) -> int:
     """:func:`fused_step` on the ``views`` of its two flat arrays."""
     q, qd, tau_m, tau_j = sample
-    const, table, flags, state, work = views
+    const, table, flags, state, work, adapter = views
     n = q.shape[0]
     old = flags[0]
     if time <= old[FLOOR]:
@@ -410,23 +496,32 @@ def _step(time: float, sample: Any, model: FloatArray, views: Any, out: FloatArr
                 return FAULT_GAP
     new, event, rows = flags[1], flags[2], state[1]
     _copy(old, new)
+    _copy(adapter[0], adapter[1])
     event[OPEN] = 0.0
     if restart:
         if old[HAS_STREAM] != 0.0 and old[HAS_DETECTOR] != 0.0:
             _close(old, model[MIN_DURATION], event)
         _restart(q, qd, const, model, rows, work)
         new[HAS_STREAM], new[START], new[HAS_DETECTOR] = 1.0, time, 0.0
+        new[QUIET_FROM] = -np.inf
     else:
         _copy(state[0], rows)
     fresh = not restart and old[T_LAST] == old[START]
+    if restart or fresh:  # the adapter's filters start with the observer; what it learned stays
+        _adapter_restart(model, adapter[1], n)
     if not _observe(q, qd, tau_j if joint else tau_m, const, model, rows, work, fresh):
         old[PENDING] = time
         for j in range(n):
             if not abs(rows[VELOCITY, j]) <= const[j, SPEED_LIMIT]:
                 return FAULT_VELOCITY
         return FAULT_OBSERVER
-    _copy(rows[RESIDUAL], out[0])
-    if time - new[START] < model[SETTLE]:
+    settling = time - new[START] < model[SETTLE]
+    if model[ADAPT_AT] > 0.0:
+        trusted = not settling and old[LATCHED] == 0.0 and time >= new[QUIET_FROM]
+        _adapt(model, adapter[1:], rows, trusted, out)
+    else:
+        _copy(rows[RESIDUAL], out[0])
+    if settling:
         out[1:] = np.nan
         code = SETTLING
     else:
@@ -437,9 +532,12 @@ def _step(time: float, sample: Any, model: FloatArray, views: Any, out: FloatArr
             old[PENDING] = time
             return FAULT_BOUNDS
         code = _detect(time, const, model, out, new, event)
+    if code >> JOINTS_SHIFT != 0 or code & 15 == COLLISION:
+        new[QUIET_FROM] = time + model[GUARD]
     new[T_LAST], new[FLOOR], new[PENDING] = time, time, -np.inf
     _copy(new, old)
     _copy(rows, state[0])
+    _copy(adapter[1], adapter[0])
     return code | (EVENT if event[OPEN] != 0.0 else 0)
 
 

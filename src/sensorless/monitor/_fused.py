@@ -20,6 +20,7 @@ from .._validation import FloatArray
 from ..detection import TIME_TOLERANCE
 from ..friction import Coulomb, CoulombViscous, HystereticError, Sigmoid, Stribeck, Viscous
 from ..friction.static import FrictionModel
+from ..observers._adaptive_kernel import temporaries_size
 from ..signals import Event
 from ..thresholds import ConstantThreshold, Threshold, TimeVariantThreshold, VelocityThreshold
 from . import _compiled as kernel
@@ -48,8 +49,6 @@ def unsupported(monitor: CollisionMonitor) -> str:
     """Why the compiled stream cannot run ``monitor`` ("" when it can)."""
     kind, threshold, n_dof = monitor.settings.kind, monitor.threshold, monitor.robot.n_dof
     friction = getattr(monitor._observer, "friction_model", None)
-    if monitor.adaptation is not None:
-        return "drift adaptation runs on the Python path only"
     if kind not in ("motor", "joint"):
         return f"the {kind!r} observer runs on the Python path only"
     if type(threshold) not in _FAMILIES:
@@ -94,18 +93,26 @@ class FusedStream:
         const[np.asarray(detector.monitored_joints) - 1, kernel.MONITORED] = 1.0
         release = math.nan if policy.release is None else policy.release - TIME_TOLERANCE
         const_at = kernel.HEADER + 8 * sos.shape[0] + edges.size
+        table_at = const_at + const.size
+        adapter, self._adapter_start = _adapter(monitor, n)
+        flags, rows = 3 * kernel.N_FLAGS, 2 * (kernel.SECTIONS + 2 * sos.shape[0]) * n
+        adapter_state = flags + rows + 23 * n
         header = [
             # durations compared up to the Detector's tolerance on time differences
             dt, policy.early * dt, policy.gap * dt, monitor.settle - TIME_TOLERANCE, release,
             detector.min_duration - TIME_TOLERANCE, detector.hold - TIME_TOLERANCE,
             observer.torque == "joint", friction, family,
-            extra, sos.shape[0], edges.size, const_at, const_at + const.size,
+            extra, sos.shape[0], edges.size, const_at, table_at,
+            table_at + table.size if adapter.size else 0, adapter_state,
+            self._adapter_start.size, monitor._guard,
         ]  # fmt: skip
-        parts = [np.array(header, dtype=np.float64), sos, zi_unit, edges, const, table]
+        parts = [np.array(header, dtype=np.float64), sos, zi_unit, edges, const, table, adapter]
         self._model = np.concatenate([np.ravel(part) for part in parts])
         self._model.setflags(write=False)
-        flags, rows = 3 * kernel.N_FLAGS, 2 * (kernel.SECTIONS + 2 * sos.shape[0]) * n
-        self._buffers = _fresh(np.zeros(flags + rows + 23 * n))
+        temporaries = 0 if adapter.size == 0 else temporaries_size(n, int(adapter[2]))
+        self._buffers = self._fresh(
+            np.zeros(adapter_state + 2 * self._adapter_start.size + temporaries)
+        )
         self._flags = self._buffers[:flags].reshape(3, kernel.N_FLAGS)
         self._state = self._buffers[flags : flags + rows].reshape(2, -1, n)
         self._masks = [_joints(mask) for mask in range(1 << n)] if n <= 10 else None
@@ -129,8 +136,20 @@ class FusedStream:
         """
 
     def reset(self) -> None:
-        """Forget the stream and the latch."""
-        _fresh(self._buffers)
+        """Forget the stream, the latch and what the drift adapter learned."""
+        self._fresh(self._buffers)
+
+    def _fresh(self, buffers: FloatArray) -> FloatArray:
+        """``buffers`` as a stream that saw no sample (no time floor, nothing latched)."""
+        flags = buffers[: kernel.N_FLAGS]
+        flags[:] = 0.0
+        flags[[kernel.FLOOR, kernel.PENDING]] = -np.inf
+        flags[kernel.INSIDE_SINCE] = np.nan
+        size = self._adapter_start.size
+        if size:
+            start = int(self._model[kernel.ADAPT_STATE])
+            buffers[start : start + 2 * size].reshape(2, size)[:] = self._adapter_start
+        return buffers
 
     def run(
         self,
@@ -174,7 +193,7 @@ class FusedStream:
         """
         q, qd, tau_m, tau_j = sample
         n_samples, n = q.shape
-        buffers = _fresh(np.zeros_like(self._buffers))
+        buffers = self._fresh(np.zeros_like(self._buffers))
         series = np.full((7, n_samples, n), np.nan)
         codes = np.zeros(n_samples, dtype=np.int64)
         closed = np.zeros((n_samples, 5))
@@ -238,13 +257,24 @@ def _entry_point(function: Any, signature: Any) -> Any:
     return getattr(overload, "entry_point", function)
 
 
-def _fresh(buffers: FloatArray) -> FloatArray:
-    """``buffers`` as a stream that saw no sample (no time floor, nothing latched)."""
-    flags = buffers[: kernel.N_FLAGS]
-    flags[:] = 0.0
-    flags[[kernel.FLOOR, kernel.PENDING]] = -np.inf
-    flags[kernel.INSIDE_SINCE] = np.nan
-    return buffers
+def _adapter(monitor: CollisionMonitor, n: int) -> tuple[FloatArray, FloatArray]:
+    """The drift adapter's parameters and initial state, flat, as ``_adapter_parts`` reads them.
+
+    Both empty without adaptation.
+    """
+    adapter = monitor._adapter
+    if adapter is None:
+        return np.zeros(0), np.zeros(0)
+    pole, weight, v_s, max_corr, norm_w, box, step_bound = adapter._params
+    per_joint = [np.broadcast_to(v, (n,)) for v in (pole, weight, v_s, max_corr, step_bound)]
+    parameters = np.concatenate([adapter._scalars, *per_joint, np.ravel(norm_w), np.ravel(box)])
+    state = adapter.initial_state()
+    fields = (
+        state.theta, state.estimate, state.covariance, state.regressor,
+        state.filtered_regressor, state.correction, state.filtered_correction,
+        state.updates.astype(np.float64), [float(state.started)],
+    )  # fmt: skip
+    return parameters, np.concatenate([np.ravel(field) for field in fields])
 
 
 def _event(fields: list[float], method: str) -> Event:

@@ -100,7 +100,7 @@ class CollisionMonitor:
         and residuals and bounds within rounding.
     adaptation : Adaptation, optional
         Adapt the nominal friction and offsets to drift (momentum observers;
-        Python path): see :mod:`sensorless.monitor.adaptation`.
+        compiled with the families above): see :mod:`sensorless.monitor.adaptation`.
 
     Raises
     ------

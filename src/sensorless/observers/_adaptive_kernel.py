@@ -19,7 +19,12 @@ import numpy as np
 from .._validation import FloatArray
 from ._adaptive_state import _Work
 
-__all__ = ["advance_block", "compiled", "run"]
+__all__ = ["advance_block", "advance_rows", "compiled", "compiled_rows", "run", "temporaries_size"]
+
+
+def temporaries_size(n: int, m: int) -> int:
+    """Length of the flat ``scratch`` of :func:`advance_rows` for n joints and m columns."""
+    return n * (6 + 3 * m + m * m) + 3 * m
 
 
 def advance_block(
@@ -41,22 +46,55 @@ def advance_block(
     (pole, weight, v_s, max_correction, norm weights, box, rate·dt);
     ``scalars`` = (λ, max_trace, columns).
     """
+    n, m = r.shape[1], int(scalars[2])
+    scratch = np.empty(temporaries_size(n, m))
+    advance_rows(r, qd, h, trusted, state, flags, updates, params, scalars, out, scratch)
+
+
+def advance_rows(
+    r: FloatArray,
+    qd: FloatArray,
+    h: FloatArray,
+    trusted: Any,
+    state: tuple[FloatArray, ...],
+    flags: Any,
+    updates: Any,
+    params: tuple[FloatArray, ...],
+    scalars: FloatArray,
+    out: FloatArray,
+    scratch: FloatArray,
+) -> None:
+    """:func:`advance_block` with its temporaries in ``scratch`` (see :func:`temporaries_size`).
+
+    A stream calls it once per sample on one row: with the temporaries in
+    its own buffers it allocates nothing.
+    """
     theta, estimate, cov, reg, freg, corr, fcorr = state
     pole, weight, v_s, max_corr, norm_w, box, step_bound = params
     lam, max_trace = scalars[0], scalars[1]
     m = int(scalars[2])
     n_samples, n = r.shape
-    phi = np.empty((n, 3))
-    delta = np.empty(n)
-    psi = np.empty((n, m))
-    filt = np.empty(n)
-    model_part = np.zeros(n)
-    new_theta = np.empty((n, m))
-    new_est = np.empty((n, m))
-    new_cov = np.empty((n, m, m))
-    p_psi = np.empty(m)
-    gain = np.empty(m)
-    move = np.empty(m)
+    phi = scratch[: 3 * n].reshape((n, 3))
+    at = 3 * n
+    delta, filt, model_part = (
+        scratch[at : at + n],
+        scratch[at + n : at + 2 * n],
+        scratch[at + 2 * n : at + 3 * n],
+    )
+    at += 3 * n
+    psi = scratch[at : at + n * m].reshape((n, m))
+    new_theta = scratch[at + n * m : at + 2 * n * m].reshape((n, m))
+    new_est = scratch[at + 2 * n * m : at + 3 * n * m].reshape((n, m))
+    at += 3 * n * m
+    new_cov = scratch[at : at + n * m * m].reshape((n, m, m))
+    at += n * m * m
+    p_psi, gain, move = (
+        scratch[at : at + m],
+        scratch[at + m : at + 2 * m],
+        scratch[at + 2 * m : at + 3 * m],
+    )
+    for j in range(n):
+        model_part[j] = 0.0
     for k in range(n_samples):
         finite = True
         for j in range(n):
@@ -206,9 +244,14 @@ def run(
 
 
 compiled: Any
+compiled_rows: Any
 try:
     from numba import njit
 except ImportError:  # FrictionAdapter._advance (numpy) is the fallback
-    compiled = None
+    compiled = compiled_rows = None
 else:
+    # advance_block calls these by their global names: bound to the compiled
+    # versions before advance_block is compiled, those calls stay in machine code.
+    temporaries_size = njit(cache=True)(temporaries_size)
+    advance_rows = compiled_rows = njit(cache=True)(advance_rows)
     compiled = njit(cache=True)(advance_block)

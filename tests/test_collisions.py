@@ -137,6 +137,7 @@ def test_contact_normalises_direction_and_wrench() -> None:
         "end": 1.0,
         "peak": 10.0,
         "profile": "HalfSine",
+        "kind": "collision",
     }
 
 

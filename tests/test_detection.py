@@ -314,9 +314,11 @@ def test_result_tables() -> None:
         "peak",
         "peak_residual",
         "method",
+        "level",
     ]
     assert events.loc[0, "duration"] == pytest.approx(0.02)
     assert events.loc[0, "method"] == "time-variant"
+    assert events.loc[0, "level"] == ""  # a one-level detector
     empty = events_to_pandas([])
     assert isinstance(empty, pd.DataFrame) and empty.empty and "peak" in empty.columns
 

@@ -276,7 +276,9 @@ def saved() -> dict[str, tuple[dict[str, Any], Threshold, ObserverSignals]]:
     pair = (_runs(2), _runs(2, kind="joint"))
     combined = CombinedVelocityThreshold(bin_width=0.25).fit([pair])
     fits["velocity_combined"] = (combined, pair[0])
-    assert {type(th).name for th, _ in fits.values()} == set(METHODS)
+    # The learned family needs a network trained for its robot: its file round trip is in
+    # tests/test_learned.py.
+    assert {type(th).name for th, _ in fits.values()} == set(METHODS) - {"learned"}
     return {key: (th.to_dict(), th, r) for key, (th, r) in fits.items()}
 
 

@@ -7,6 +7,7 @@ with time along axis 0.
 from __future__ import annotations
 
 from . import (
+    classification,
     detection,
     evaluation,
     exceptions,
@@ -14,6 +15,7 @@ from . import (
     friction,
     identification,
     io,
+    isolation,
     observers,
     robots,
     thresholds,
@@ -37,6 +39,7 @@ __all__ = [
     "SensorlessError",
     "__version__",
     "base_parameters",
+    "classification",
     "detection",
     "evaluation",
     "exceptions",
@@ -44,6 +47,7 @@ __all__ = [
     "friction",
     "identification",
     "io",
+    "isolation",
     "load_tuned",
     "observers",
     "read_log",

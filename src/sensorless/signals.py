@@ -138,6 +138,9 @@ class Event:
         Residual value [N m] at the joint and time of the peak excursion.
     method : str
         Name of the threshold family that detected it.
+    level : str
+        Reaction level from a two-level detector (``LevelledDetector``):
+        ``"contact"`` or ``"collision"``; empty from a one-level detector.
     """
 
     start: float
@@ -146,6 +149,7 @@ class Event:
     peak: float
     peak_residual: float
     method: str = ""
+    level: str = ""
 
     @property
     def duration(self) -> float:

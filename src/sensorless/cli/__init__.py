@@ -17,6 +17,7 @@ from .benchmark import benchmark_command
 from .demo import demo_command
 from .identify import excite_command, identify_friction_command, identify_inertial_command
 from .importing import import_command
+from .plan import plan_command
 from .report import report_command
 from .run import (
     detect_command,
@@ -26,6 +27,7 @@ from .run import (
     simulate_command,
     tune_command,
 )
+from .train import train_detector_command
 
 __all__ = ["app", "main"]
 
@@ -58,7 +60,9 @@ COMMANDS: dict[str, Callable[..., None]] = {
     "benchmark": benchmark_command,
     "excite": excite_command,
     "import": import_command,
+    "plan": plan_command,
     "report": report_command,
+    "train-detector": train_detector_command,
 }
 for name, command in COMMANDS.items():
     app.command(name)(user_errors(command))

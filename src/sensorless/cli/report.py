@@ -12,7 +12,8 @@ from ..comparison import Comparison, write_comparison_report
 from ..evaluation import DEFAULT_MAX_DELAY, evaluate
 from ..exceptions import InputValueError
 from ..io import Log, read_log
-from ..monitor import CollisionMonitor, ObserverSettings, load_tuned
+from ..monitor import CollisionMonitor, LevelledMonitor, ObserverSettings, load_tuned
+from ..report import levels_section
 from ..signals import Event, ObserverSignals
 from ..thresholds import Threshold
 from ._common import console, nominal_robot, output_path
@@ -79,6 +80,14 @@ def report_command(
     output: Annotated[
         Path, typer.Option("-o", "--output", help="The HTML report to write.")
     ] = Path("report.html"),
+    contact_threshold: Annotated[
+        Path | None,
+        typer.Option(
+            "--contact-threshold",
+            help="File written by `tune` for the lower, contact band: the report adds the "
+            "events by level (contact, collision = the first --thresholds).",
+        ),
+    ] = None,
 ) -> None:
     """Write the HTML report (summary, tables, figures) of thresholds on one log."""
     destination = output_path(output, suffixes=(".html", ".htm"))
@@ -90,8 +99,18 @@ def report_command(
     if robot is not None:
         command += ["--robot", robot]
     command += ["-o", str(output)]
+    sections = []
+    if contact_threshold is not None:
+        command += ["--contact-threshold", str(contact_threshold)]
+        threshold, settings = load_tuned(thresholds[0])
+        contact, _ = load_tuned(contact_threshold)
+        monitor = CollisionMonitor(nominal_robot(robot, data, settings.kind), threshold, settings)
+        levelled = LevelledMonitor(monitor, contact).process(data)
+        sections.append(levels_section(levelled.events, log=data))
     summary = comparison.overview()
     console.print(summary.sentence, markup=False, highlight=False)
     console.print(RULE, markup=False, highlight=False)
-    written = write_comparison_report([comparison], destination, command=shlex.join(command))
+    written = write_comparison_report(
+        [comparison], destination, command=shlex.join(command), sections=sections
+    )
     console.print(f"report: {written}", markup=False, highlight=False)

@@ -11,11 +11,13 @@ from rich.table import Table
 
 from .. import robots as robot_registry
 from ..detection import events_to_pandas
+from ..detection.levels import threshold_label
 from ..evaluation import comparison_table, evaluate, summary_table
 from ..io import Log, read_log, write_log
 from ..monitor import (
     METHOD_NAMES,
     CollisionMonitor,
+    LevelledMonitor,
     MonitorRun,
     ObserverSettings,
     calibration_of,
@@ -221,8 +223,20 @@ def detect_command(
     robot: Annotated[
         str | None, typer.Option("--robot", help="Nominal model (default: the log's scenario).")
     ] = None,
+    contact_threshold: Annotated[
+        Path | None,
+        typer.Option(
+            "--contact-threshold",
+            help="File of a lower, contact-level threshold on the same residual: every "
+            "excursion beyond it is printed with its level, contact or collision (the "
+            "--thresholds file is the collision level).",
+        ),
+    ] = None,
 ) -> None:
     """Detect collisions in a log and print the events, and the false alarms tuning expected."""
+    if contact_threshold is not None:
+        _detect_levels(log, thresholds, contact_threshold, robot)
+        return
     _, method, result = _detect(log, thresholds, robot)
     _print_faults(result)
     console.print(f"{len(result.events)} event(s) detected by {method}")
@@ -233,6 +247,25 @@ def detect_command(
         console.print("expected at tuning:", highlight=False)
         for line in calibration.summary():
             console.print(f"  {line}", markup=False, highlight=False)
+
+
+def _detect_levels(log_path: Path, thresholds: Path, contact_path: Path, robot: str | None) -> None:
+    """``detect --contact-threshold``: the events beyond the contact band, with their level."""
+    log = read_log(log_path, allow_missing=True)
+    threshold, settings = load_tuned(thresholds)
+    contact, _ = load_tuned(contact_path)
+    monitor = CollisionMonitor(nominal_robot(robot, log, settings.kind), threshold, settings)
+    result = LevelledMonitor(monitor, contact).process(log)
+    _print_faults(result.run)
+    counts = result.counts()
+    console.print(
+        f"{len(result.events)} event(s) beyond the contact band ({threshold_label(contact)}): "
+        f"{counts['contact']} contact, {counts['collision']} collision (also beyond the "
+        f"collision band, {threshold_label(threshold)})",
+        highlight=False,
+    )
+    if result.events:
+        print_table(result.events_to_pandas())
 
 
 def evaluate_command(

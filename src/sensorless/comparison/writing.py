@@ -159,6 +159,7 @@ def write_comparison_report(
     real_arm: RealArm | None = None,
     *,
     command: str | None = None,
+    sections: Sequence[tuple[str, list[Any]]] = (),
 ) -> Path:
     """One self-contained HTML report: the summary first, then every comparison in detail.
 
@@ -171,12 +172,13 @@ def write_comparison_report(
     method missed it, how far the residual stayed inside the band. A
     glossary explains every column once. With ``real_arm``, a last section
     "Real arm (UR10)": the held-out false-alarm table and the residual of a
-    held-out recording, or why the recipe was skipped. The footer states the
-    library version, the seeds and ``command`` (default: this process's
-    command line).
+    held-out recording, or why the recipe was skipped. ``sections``
+    (heading, items), e.g. :func:`~sensorless.report.levels_section`, come
+    after the comparisons. The footer states the library version, the seeds
+    and ``command`` (default: this process's command line).
     """
     summaries = [comparison.overview() for comparison in comparisons]
-    sections: list[tuple[str, list[Any]]] = []
+    extra, sections = list(sections), []
     if summaries:
         overview: list[Any] = []
         for summary in summaries:
@@ -184,6 +186,7 @@ def write_comparison_report(
         sections.append(("Summary", overview))
     for comparison, summary in zip(comparisons, summaries, strict=True):
         sections.append((comparison.scenario, _scenario_items(comparison, summary)))
+    sections += extra
     if summaries:
         sections.append(("Glossary", [Glossary(GLOSSARY)]))
     if real_arm is not None:

@@ -51,13 +51,29 @@ from __future__ import annotations
 
 from ._results import DetectionResult, DetectorState, Status, Verdict, events_to_pandas
 from .detector import TIME_TOLERANCE, Detector
+from .levels import (
+    LEVELS,
+    LevelledDetector,
+    LevelledEvent,
+    LevelledResult,
+    LevelledState,
+    LevelledVerdict,
+    levelled_events_to_pandas,
+)
 
 __all__ = [
+    "LEVELS",
     "TIME_TOLERANCE",
     "DetectionResult",
     "Detector",
     "DetectorState",
+    "LevelledDetector",
+    "LevelledEvent",
+    "LevelledResult",
+    "LevelledState",
+    "LevelledVerdict",
     "Status",
     "Verdict",
     "events_to_pandas",
+    "levelled_events_to_pandas",
 ]

@@ -23,7 +23,9 @@ __all__ = ["DetectionResult", "DetectorState", "Status", "Verdict", "events_to_p
 BoolArray = NDArray[np.bool_]
 Status = Literal["ok", "collision", "fault", "settling"]
 
-_EVENT_COLUMNS = ["start", "end", "duration", "joints", "peak", "peak_residual", "method"]
+_EVENT_COLUMNS = [
+    "start", "end", "duration", "joints", "peak", "peak_residual", "method", "level",
+]  # fmt: skip
 
 
 def _merged(earlier: Event, later: Event) -> Event:
@@ -218,8 +220,9 @@ class DetectionResult:
 
 def events_to_pandas(events: list[Event]) -> pd.DataFrame:
     """Table of events: start, end, duration [s], joints (tuple, 1-based), peak,
-    peak_residual [N m], method; one row per event."""
+    peak_residual [N m], method, level; one row per event."""
     rows = [
-        [e.start, e.end, e.duration, e.joints, e.peak, e.peak_residual, e.method] for e in events
+        [e.start, e.end, e.duration, e.joints, e.peak, e.peak_residual, e.method, e.level]
+        for e in events
     ]
     return pd.DataFrame(rows, columns=_EVENT_COLUMNS)

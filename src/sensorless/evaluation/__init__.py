@@ -41,17 +41,30 @@ Table 5.9) and below the 1 s minimum gap between simulated contacts.
 
 from __future__ import annotations
 
+from .classification import (
+    ClassificationEvaluation,
+    classification_table,
+    evaluate_classification,
+    ground_truth_kinds,
+)
+from .isolation import IsolationEvaluation, evaluate_isolation
 from .scoring import DEFAULT_MAX_DELAY, Evaluation, evaluate
 from .tables import comparison_table, efficiency_table, summary_table
 from .windows import Window, collision_windows
 
 __all__ = [
     "DEFAULT_MAX_DELAY",
+    "ClassificationEvaluation",
     "Evaluation",
+    "IsolationEvaluation",
     "Window",
+    "classification_table",
     "collision_windows",
     "comparison_table",
     "efficiency_table",
     "evaluate",
+    "evaluate_classification",
+    "evaluate_isolation",
+    "ground_truth_kinds",
     "summary_table",
 ]

@@ -14,6 +14,8 @@
 - What a rigid-body model lacks on a real arm, joint by joint from its error
   on logs: a motor-torque offset and asymmetric Coulomb + viscous friction,
   :func:`identify_correction` → :class:`NominalCorrection`.
+- An unknown payload's mass and centre of mass from the momentum residual of
+  a collision-free motion: :func:`estimate_payload`, :class:`PayloadEstimator`.
 """
 
 from .consistent import ConsistentFit, consistent_parameters
@@ -33,6 +35,7 @@ from .friction import (
 )
 from .logs import identify_from_logs
 from .matrices import contributing_terms, identify_from_matrices, matrix_regressors
+from .payload import PayloadEstimate, PayloadEstimator, estimate_payload
 from .regression import (
     EliminationReport,
     RegressionAccumulator,
@@ -52,12 +55,15 @@ __all__ = [
     "FrictionFit",
     "FrictionIdentification",
     "NominalCorrection",
+    "PayloadEstimate",
+    "PayloadEstimator",
     "RegressionAccumulator",
     "RegressionResult",
     "RelativeWeightSignificance",
     "consistent_parameters",
     "contributing_terms",
     "eliminate",
+    "estimate_payload",
     "fit_coulomb",
     "fit_coulomb_viscous",
     "fit_lugre_dynamic",

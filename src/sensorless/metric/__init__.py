@@ -33,6 +33,10 @@ online, and take the largest error of each entry of Q̂. B_Θ̃ is relative
 intervals). :func:`rank_trajectories` does all of it for a set of
 trajectories (Table 3.2).
 
+:func:`optimize_trajectory` solves the problem of eq. 3.29 that the thesis
+leaves open: the trajectory between two poses that minimises EM[q], with B_Q̃
+of each candidate by the same Table 3.1 method (:mod:`sensorless.metric.optimal`).
+
 Examples
 --------
 >>> import numpy as np
@@ -65,14 +69,18 @@ from .bounds import (
     q_vector,
 )
 from .estimation import estimation_metric, metric_terms, rank_trajectories
+from .optimal import PlannedTrajectory, load_plan, optimize_trajectory
 
 __all__ = [
     "DEFAULT_CHUNK_SIZE",
     "BoundTerms",
+    "PlannedTrajectory",
     "check_bq",
     "error_bound_terms",
     "estimation_metric",
+    "load_plan",
     "metric_terms",
+    "optimize_trajectory",
     "parameter_bounds",
     "q_error_bounds",
     "q_length",

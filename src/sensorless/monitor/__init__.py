@@ -28,6 +28,7 @@ from .calibration import (
     margin_for_rate,
     poisson_interval,
 )
+from .levels import LevelledMonitor, LevelledRun, tune_levels
 from .policy import Limits, StreamPolicy
 from .stream import CollisionMonitor
 from .tuning import (
@@ -45,6 +46,8 @@ __all__ = [
     "Calibration",
     "CollisionMonitor",
     "FaultSpan",
+    "LevelledMonitor",
+    "LevelledRun",
     "Limits",
     "MonitorRun",
     "ObserverSettings",
@@ -59,4 +62,5 @@ __all__ = [
     "poisson_interval",
     "save_tuned",
     "tune",
+    "tune_levels",
 ]

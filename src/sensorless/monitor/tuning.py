@@ -29,7 +29,9 @@ from ..robots.model import RobotModel
 from ..signals import ObserverSignals
 from ..thresholds import (
     ConstantThreshold,
+    LearnedThreshold,
     ModelBasedThreshold,
+    PayloadThreshold,
     Threshold,
     TimeVariantThreshold,
     VelocityThreshold,
@@ -65,6 +67,7 @@ METHOD_NAMES: dict[str, str] = {
     "hysteretic": "motor",
     "velocity": "motor",
     "model": "acceleration",
+    "learned": "motor",
 }
 _FILTERS = ("default", "finite_difference", "dirty_derivative", "butterworth")
 
@@ -177,6 +180,8 @@ def make_threshold(method: str, robot: RobotModel, **options: Any) -> Threshold:
         return VelocityThreshold(**options)
     if method == "model":
         return ModelBasedThreshold(robot, **options)
+    if method == "learned":
+        return LearnedThreshold(**options)
     raise UnknownNameError(f"no threshold family for method {method!r}")  # pragma: no cover
 
 
@@ -218,6 +223,7 @@ def tune(
     confidence: float = 0.95,
     seed: int = 0,
     margin_fraction: float | None = None,
+    payload: dict[str, Any] | None = None,
     **options: Any,
 ) -> tuple[Threshold, ObserverSettings]:
     """Fit a threshold family on collision-free logs and say what false-alarm rate to expect.
@@ -254,6 +260,15 @@ def tune(
         (eq. 5.32) [-]; :data:`DEFAULT_MARGIN_FRACTION` (10 %, the demo's)
         when neither ``margin`` nor ``false_alarm_rate`` is given. Every
         family then gets the same margin in N m, so none runs with margin 0.
+    payload : dict, optional
+        A payload the arm may grip that ``robot`` lacks, as the keywords of
+        :class:`~sensorless.thresholds.PayloadThreshold`: ``max_mass`` [kg],
+        ``center``, ``radius`` or ``half_widths`` [m] in the end-link frame,
+        ``velocity_error`` [rad/s]. The family is fitted on ``logs`` (without
+        the payload) and wrapped, so that a gripped object up to that mass is
+        no collision; the cross-validation judges the wrapped threshold. Not
+        with ``false_alarm_rate``. Such a threshold runs on the Python path
+        and has no file format yet.
     **options
         Hyper-parameters of the threshold (``margin``, ``joints``, ``transient``...).
         ``margin`` [N m], a number or one per joint, is the absolute form (not
@@ -288,6 +303,11 @@ def tune(
             f"'runs' or an integer; got margin={options.get('margin')!r}, "
             f"margin_fraction={margin_fraction!r}, folds={folds!r}"
         )
+    if payload is not None and false_alarm_rate is not None:
+        raise InputValueError(
+            "a declared payload widens the bounds beyond any margin: give it with a margin "
+            "(margin or margin_fraction), not with false_alarm_rate"
+        )
     if margin_fraction is not None:
         if "margin" in options:
             raise InputValueError(
@@ -310,13 +330,17 @@ def tune(
         options["margin"] = _band_margin(signals, fraction, options)
     detector: dict[str, Any] = {"folds": folds, "min_duration": min_duration, "hold": hold}
     stated = None
+
+    def shape() -> Threshold:
+        family = make_threshold(method, robot, **options)
+        return family if payload is None else PayloadThreshold(family, robot, **payload)
+
     if false_alarm_rate is not None:
-        shape = make_threshold(method, robot, **options)
         stated = margin_for_rate(
-            signals, shape, false_alarm_rate, confidence=confidence, seed=seed, **detector
+            signals, shape(), false_alarm_rate, confidence=confidence, seed=seed, **detector
         )
         options["margin"] = list(stated.margin)
-    threshold = make_threshold(method, robot, **options).fit(signals)
+    threshold = shape().fit(signals)
     if folds is None:
         return threshold, settings
     calibration = cross_validate(

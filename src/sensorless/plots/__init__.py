@@ -21,9 +21,14 @@ in N m, joints are numbered from 1. Figures are 11 in wide (1100 px at
   feel it: residual, every method's bounds, the true τ_c, detection instants.
 * :func:`plot_missed` — for the methods that missed a collision, how far the
   residual stayed from the bound (:func:`headroom`).
+* :func:`plot_planned_trajectory` — a trajectory planned by
+  :func:`sensorless.metric.optimize_trajectory` against the quintic, and the
+  bound B_c(t) along both.
 * :func:`plot_held_out` — a held-out real recording of
   :func:`sensorless.realarm.evaluate_folds`: its residual against every
   family's bounds, apparent contacts shaded.
+* :func:`plot_isolation` — estimated against true contact force over each
+  event (:func:`sensorless.evaluation.evaluate_isolation`).
 """
 
 from __future__ import annotations
@@ -36,8 +41,10 @@ from .collisions import (
     plot_collision,
     plot_missed,
 )
+from .isolation import plot_isolation
 from .residuals import plot_held_out, plot_residuals, plot_tau_c
 from .timeline import force_bins, plot_detection_vs_force, plot_evaluation
+from .trajectory import plot_planned_trajectory
 
 __all__ = [
     "Headroom",
@@ -49,7 +56,9 @@ __all__ = [
     "plot_detection_vs_force",
     "plot_evaluation",
     "plot_held_out",
+    "plot_isolation",
     "plot_missed",
+    "plot_planned_trajectory",
     "plot_residuals",
     "plot_tau_c",
 ]

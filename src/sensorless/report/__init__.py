@@ -40,6 +40,7 @@ from .html import (
     Table,
     write_report,
 )
+from .levels import level_counts_table, levels_section
 from .summary import (
     GLOSSARY,
     STRONG_FORCE,
@@ -65,6 +66,8 @@ __all__ = [
     "band_widths",
     "best_cells",
     "collision_table",
+    "level_counts_table",
+    "levels_section",
     "summarize",
     "summary_sentence",
     "write_report",

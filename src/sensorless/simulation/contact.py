@@ -175,7 +175,7 @@ class Contact:
 
         Keys: ``id``, ``link``, ``point`` [m], ``direction`` (unit, base
         frame), ``start`` [s], ``end`` [s], ``peak`` [N], ``profile`` (class
-        name).
+        name), ``kind`` (ground-truth label, "intended" or "collision").
         """
         return {
             "id": self.id,
@@ -186,6 +186,7 @@ class Contact:
             "end": self.end,
             "peak": self.profile.peak,
             "profile": type(self.profile).__name__,
+            "kind": self.profile.kind,
         }
 
 

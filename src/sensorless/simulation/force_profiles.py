@@ -6,6 +6,13 @@ that ramps up, holds and releases, or a :class:`Recorded` force such as the
 hand force of thesis Fig. 5.5. A :class:`~sensorless.simulation.contact.Contact`
 applies a profile along a direction at a point of a link.
 
+Every profile carries a ground-truth label :attr:`ForceProfile.kind`, one
+of :data:`INTERACTION_KINDS`: "collision" (accidental), what the detection
+benchmark has always taken a contact for, unless the profile models a
+person's intended interaction. The profiles of who or what applies the force
+(thesis §6.2 item 7: a guiding hand, a clamp, an impact) are in
+:mod:`sensorless.simulation.interaction_profiles`.
+
 Examples
 --------
 >>> hit = HalfSine(start=1.0, duration=0.2, peak=50.0)
@@ -19,7 +26,7 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from os import PathLike
-from typing import Any, overload
+from typing import Any, ClassVar, overload
 
 import numpy as np
 import pandas as pd
@@ -28,7 +35,11 @@ from numpy.typing import ArrayLike, NDArray
 from .._validation import FloatArray
 from ..exceptions import InputValueError, LogFormatError
 
-__all__ = ["ForceProfile", "HalfSine", "Push", "Recorded"]
+__all__ = ["INTERACTION_KINDS", "ForceProfile", "HalfSine", "Push", "Recorded"]
+
+#: Ground-truth labels of a contact (:attr:`ForceProfile.kind`): a person's
+#: intended interaction, or an accidental collision.
+INTERACTION_KINDS: tuple[str, ...] = ("intended", "collision")
 
 
 def _number(
@@ -64,6 +75,10 @@ class ForceProfile(ABC):
     time or an array of times [s] returns the force [N] with the shape of
     ``t`` (a float for a scalar ``t``).
     """
+
+    #: Ground-truth label, one of :data:`INTERACTION_KINDS`: "collision"
+    #: unless a subclass models a person's intended interaction.
+    kind: ClassVar[str] = "collision"
 
     def __init__(self, start: float, end: float, peak: float) -> None:
         self._start = start

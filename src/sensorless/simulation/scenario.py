@@ -45,7 +45,10 @@ from ..trajectories import (
 )
 from .collisions import Contact, ContactSet, HalfSine, Push, Recorded
 from .controllers import ComputedTorque, JointPID
+from .interaction_profiles import INTERACTION_PROFILES, interaction_profile
+from .interactions import random_interactions
 from .model_error import perturb, perturb_friction
+from .payload import Payload, with_payload
 from .plants import FlexiblePlant, Friction, RigidPlant, TorqueFeedback
 from .schema import validate_scenario
 from .sensors import SensorModel
@@ -149,6 +152,8 @@ class Scenario:
             nominal = nominal.with_standard_parameters(parameters, friction=friction)
         true_friction = _friction(self.spec.get("true_friction", "robot"), true)
         true = true.with_standard_parameters(true.parameter_vector(), friction=true_friction)
+        if self.spec.get("payload") is not None:  # on the true robot only: the model lacks it
+            true = with_payload(true, Payload.from_dict(self.spec["payload"]))
         error = self.spec.get("model_error")
         if error:
             nominal = perturb(
@@ -209,7 +214,7 @@ class Scenario:
         controller = _controller(self.spec["controller"], nominal, trajectory)
         contacts = ContactSet([])
         if collisions:
-            contacts = _contacts(self.spec, true, self.duration, rng)
+            contacts = _contacts(self.spec, true, self.duration, rng, trajectory)
         return {
             "plant": plant,
             "controller": controller,
@@ -248,7 +253,9 @@ class Scenario:
         friction, and :meth:`nominal` gives, on a flexible plant, the models of
         every observer kind without model error (the link friction of the
         plant for ``kind="joint"``, the apparent motor inertia for
-        ``kind="motor"``). What no rigid-body model holds stays unmodelled:
+        ``kind="motor"``). A ``payload`` stays on the true robot only: it is
+        what the arm carries, not model error. What no rigid-body model holds
+        stays unmodelled:
         joint elasticity seen by the motor-torque observer, the presliding
         state of LuGre friction (observers use its steady state), a drifting
         friction.
@@ -474,12 +481,23 @@ def _profile(spec: Mapping[str, Any]) -> Any:
         return Recorded.from_csv(
             spec["file"], start=spec.get("start", 0.0), scale=spec.get("scale", 1.0)
         )
-    raise ModelError(f"unknown force profile {kind!r}; options: half_sine, push, recorded")
+    if kind in INTERACTION_PROFILES:
+        return interaction_profile(spec)
+    raise ModelError(
+        f"unknown force profile {kind!r}; options: half_sine, push, recorded, guiding, clamp, "
+        "impact"
+    )
 
 
 def _contacts(
-    spec: Mapping[str, Any], robot: RobotModel, duration: float, rng: np.random.Generator
+    spec: Mapping[str, Any],
+    robot: RobotModel,
+    duration: float,
+    rng: np.random.Generator,
+    trajectory: Trajectory,
 ) -> ContactSet:
+    if "random_interactions" in spec:
+        return random_interactions(spec["random_interactions"], robot, trajectory, duration, rng)
     if "random_collisions" in spec:
         options = dict(spec["random_collisions"])
         count = int(options.pop("count"))

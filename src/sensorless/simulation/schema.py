@@ -42,13 +42,14 @@ from ..io.file_schema import (
     shown,
     version_field,
 )
+from .schema_interactions import Contact, RandomInteractionsSpec
 from .schema_parts import (
     FRICTION_HELP,
-    Contact,
     Controller,
     Friction,
     LuGreFriction,
     ModelErrorSpec,
+    PayloadSpec,
     Plant,
     RandomCollisionsSpec,
     RigidPlantSpec,
@@ -106,6 +107,13 @@ class ScenarioFile(FileModel):
     random_collisions: RandomCollisionsSpec = absent(
         "Contacts drawn at random (not with collisions)."
     )
+    random_interactions: RandomInteractionsSpec = absent(
+        "Guiding (intended), clamp and impact contacts drawn at random, labelled in the "
+        "ground truth (not with collisions or random_collisions)."
+    )
+    payload: PayloadSpec = absent(
+        "A payload on the true robot's end link that the nominal model lacks (absent: none)."
+    )
 
     @model_validator(mode="after")
     def _consistent(self) -> ScenarioFile:
@@ -114,6 +122,13 @@ class ScenarioFile(FileModel):
                 "contacts",
                 "give collisions or random_collisions, not both",
                 {"field": "random_collisions"},
+            )
+        drawn = self.random_collisions is not None or bool(self.collisions)
+        if self.random_interactions is not None and drawn:
+            raise PydanticCustomError(
+                "contacts",
+                "give random_interactions alone, not with collisions or random_collisions",
+                {"field": "random_interactions"},
             )
         ids = [contact.id for contact in self.collisions]
         repeated = sorted({i for i in ids if ids.count(i) > 1})

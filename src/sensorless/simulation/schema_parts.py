@@ -44,6 +44,7 @@ __all__ = [
     "FlexiblePlantSpec",
     "LuGreFriction",
     "ModelErrorSpec",
+    "PayloadSpec",
     "RandomCollisionsSpec",
     "RigidPlantSpec",
     "SensorsSpec",
@@ -533,4 +534,17 @@ class RandomCollisionsSpec(FileModel):
     margin: NonNegative = Field(default=0.5, description="Contact-free time at both ends [s].")
     point_range: NonNegative = Field(
         default=0.05, description="Half-width of the cube of points [m]."
+    )
+
+
+class PayloadSpec(FileModel):
+    """A payload on the true robot's end link, unknown to the nominal model (``Payload``)."""
+
+    mass: Positive = Field(description="Mass [kg].")
+    com: Vector3 = Field(
+        default=[0.0, 0.0, 0.0], description="Centre of mass in the end-link frame [m]."
+    )
+    inertia: Annotated[list[float], Field(min_length=6, max_length=6)] = absent(
+        "Inertia about the centre of mass, entries xx, xy, xz, yy, yz, zz in end-link axes "
+        "[kg m²] (absent: a point mass)."
     )

@@ -18,6 +18,8 @@ ModelBasedThreshold    ``"model"``            ±B_c(t) of eq. (3.36) for τ̂_c 
 :class:`CombinedVelocityThreshold` (``"velocity-combined"``) fits the
 velocity-based bounds of r̂ and r̂_s together (eq. 4.47). Thresholds give
 bounds only; :class:`sensorless.detection.Detector` turns them into events.
+:class:`PayloadThreshold` wraps any fitted family and widens its bounds for
+a payload of a declared range (mass, region in the end-link frame).
 
 Modules: :mod:`.base` (the estimator skeleton), :mod:`.fitting` (what the
 fits share), :mod:`.filtering` (K_I/(s+K_I)), :mod:`.checks`, :mod:`.state`
@@ -29,11 +31,15 @@ here imports :mod:`sensorless.detection`.
 
 from __future__ import annotations
 
+from ._learned_files import LearnedWeights, builtin_weights, load_weights, save_weights
 from .base import Threshold
 from .constant import ConstantThreshold
 from .files import METHODS, load_threshold
 from .filtering import first_order, first_order_step
+from .learned import LearnedState, LearnedThreshold
 from .model_based import ModelBasedThreshold
+from .payload import PayloadRange, PayloadThreshold
+from .phased import PhasedState, PhasedThreshold, Phases
 from .state import ThresholdInputs, ThresholdState
 from .time_variant import TimeVariantThreshold
 from .velocity import CombinedVelocityState, CombinedVelocityThreshold, VelocityThreshold
@@ -43,13 +49,24 @@ __all__ = [
     "CombinedVelocityState",
     "CombinedVelocityThreshold",
     "ConstantThreshold",
+    "LearnedState",
+    "LearnedThreshold",
+    "LearnedWeights",
     "ModelBasedThreshold",
+    "PayloadRange",
+    "PayloadThreshold",
+    "PhasedState",
+    "PhasedThreshold",
+    "Phases",
     "Threshold",
     "ThresholdInputs",
     "ThresholdState",
     "TimeVariantThreshold",
     "VelocityThreshold",
+    "builtin_weights",
     "first_order",
     "first_order_step",
     "load_threshold",
+    "load_weights",
+    "save_weights",
 ]

@@ -208,6 +208,7 @@ PARAMETER_TYPES: dict[str, Any] = {
     "disturbance": PerJointNonNegative,
     "reference_window": Positive,
     "chunk_size": PositiveInt,
+    "weights": Annotated[str, StringConstraints(min_length=1)] | None,
 }
 """Type of every hyper-parameter by name (a name means the same in every family)."""
 

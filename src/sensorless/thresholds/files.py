@@ -28,7 +28,7 @@ with the path of its field (``params.margni: unknown key; did you mean
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -74,7 +74,13 @@ __all__ = [
 METHODS: dict[str, type[Threshold]] = {}
 """Threshold classes by their class attribute ``name`` (filled as each family is defined)."""
 
-FAMILY_NAMES = ("constant", "time-variant", "hysteretic", "velocity", "velocity-combined", "model")
+READERS: dict[str, Callable[[Mapping[str, Any], str], Threshold]] = {}
+"""Readers of the ``method`` of thresholds that hold other thresholds (``phased``): each
+takes the description and its source and checks it itself; filled by their modules."""
+
+FAMILY_NAMES = (
+    "constant", "time-variant", "hysteretic", "velocity", "velocity-combined", "model", "learned",
+)  # fmt: skip
 """The one name of each family: in files, on the command line, in the API and in reports."""
 
 OLD_NAMES: dict[str, str] = {
@@ -242,6 +248,15 @@ def threshold_from_dict(
     InputValueError
         A valid description of another family than ``expected``.
     """
+    method = data.get("method") if isinstance(data, Mapping) else None
+    reader = READERS.get(method) if isinstance(method, str) else None
+    if reader is not None:
+        read = reader(data, source)
+        if expected is not None and not isinstance(read, expected):
+            raise InputValueError(
+                f"the description holds a {method!r} threshold, not {_canonical(expected.name)!r}"
+            )
+        return read
     envelope, family = _checked(data, source)
     if expected is not None and not issubclass(family, expected):
         raise InputValueError(

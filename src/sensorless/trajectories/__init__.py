@@ -56,12 +56,14 @@ from .base import Trajectory
 from .fourier import FourierSeries
 from .quintic import QuinticViaPoints
 from .random_ptp import RandomPointToPoint
+from .spline import SplineTrajectory
 from .sweeps import VelocitySweep
 
 __all__ = [
     "FourierSeries",
     "QuinticViaPoints",
     "RandomPointToPoint",
+    "SplineTrajectory",
     "Trajectory",
     "VelocitySweep",
 ]

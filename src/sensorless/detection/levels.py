@@ -65,10 +65,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validation import FloatArray, check_type
-from ..exceptions import DimensionError, InputTypeError, InputValueError, ModelMismatchError
+from ..exceptions import InputTypeError, InputValueError
 from ..signals import Event, ObserverSignals
 from ..thresholds.base import StreamBounds, Threshold
-from ..thresholds.checks import as_inputs, as_samples, check_joints, other_model
+from ..thresholds.checks import as_inputs, as_samples, check_joints, check_same_residual
 from ..thresholds.constant import ConstantThreshold
 from ..thresholds.files import family_name
 from ..thresholds.fitting import BoolArray
@@ -419,24 +419,7 @@ class LevelledDetector:
 
 def _check_pair(contact: Threshold, collision: Threshold) -> None:
     """Raise unless both thresholds bound the residual of one model, signal kind and gain."""
-    if contact.n_dof_ != collision.n_dof_:
-        raise DimensionError(
-            f"the contact threshold is for {contact.n_dof_} joints, the collision threshold "
-            f"for {collision.n_dof_}; both levels watch one robot"
-        )
-    if other_model(contact.robot_, contact.fingerprint_, collision.robot_, collision.fingerprint_):
-        raise ModelMismatchError(
-            f"the contact threshold is for robot {contact.robot_!r}, the collision threshold for "
-            f"{collision.robot_!r} (or other dynamic parameters); fit both on one model"
-        )
-    if contact.kind_ != collision.kind_ or not np.allclose(
-        contact.gain_, collision.gain_, rtol=1e-9, atol=0.0, equal_nan=True
-    ):
-        raise InputValueError(
-            f"both levels must watch one residual: the contact threshold bounds {contact.kind_!r} "
-            f"signals with K_I = {contact.gain_.tolist()} [1/s], the collision threshold "
-            f"{collision.kind_!r} with K_I = {collision.gain_.tolist()}"
-        )
+    check_same_residual(contact, collision, "the contact threshold", "the collision threshold")
 
 
 def _check_constant_widths(

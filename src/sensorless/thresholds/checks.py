@@ -117,6 +117,32 @@ def other_model(name: str, fingerprint: str, other_name: str, other_fingerprint:
     )
 
 
+def check_same_residual(first: Any, second: Any, first_name: str, second_name: str) -> None:
+    """Raise unless two fitted thresholds bound the residual of one model, kind and gain.
+
+    ``first_name`` and ``second_name`` name them in the messages ("the
+    contact threshold", "the steady part").
+    """
+    if first.n_dof_ != second.n_dof_:
+        raise DimensionError(
+            f"{first_name} is for {first.n_dof_} joints, {second_name} for {second.n_dof_}; "
+            "both watch one robot"
+        )
+    if other_model(first.robot_, first.fingerprint_, second.robot_, second.fingerprint_):
+        raise ModelMismatchError(
+            f"{first_name} is for robot {first.robot_!r}, {second_name} for {second.robot_!r} "
+            "(or other dynamic parameters); fit both on one model"
+        )
+    if first.kind_ != second.kind_ or not np.allclose(
+        first.gain_, second.gain_, rtol=1e-9, atol=0.0, equal_nan=True
+    ):
+        raise InputValueError(
+            f"both must watch one residual: {first_name} bounds {first.kind_!r} signals with "
+            f"K_I = {first.gain_.tolist()} [1/s], {second_name} {second.kind_!r} signals with "
+            f"K_I = {second.gain_.tolist()}"
+        )
+
+
 def parameters_differ(fingerprint: str, other_fingerprint: str) -> str:
     """``"; the dynamic parameters differ (…)"`` when both fingerprints are known and differ."""
     if fingerprint and other_fingerprint and fingerprint != other_fingerprint:

@@ -77,11 +77,11 @@ import numpy as np
 from scipy import signal as sp_signal
 
 from .._validation import FloatArray, check_duration, check_scalar, per_joint
-from ..exceptions import DimensionError, InputTypeError, InputValueError, ModelMismatchError
+from ..exceptions import DimensionError, InputTypeError, InputValueError
 from ..signals import ObserverSignals
 from ._phased_file import PHASED_METHOD, phased_to_dict, read_phased
 from .base import StreamBounds, Threshold
-from .checks import other_model
+from .checks import check_same_residual
 from .files import READERS
 from .fitting import BoolArray
 from .state import ThresholdInputs, ThresholdState
@@ -277,23 +277,7 @@ class PhasedThreshold(Threshold):
     def _check_parts(self) -> None:
         """Raise unless both fitted parts are for one robot model, signal kind and gain."""
         first, second = self.accelerating_, self.steady_
-        if first.n_dof_ != second.n_dof_:
-            raise DimensionError(
-                f"the accelerating part is for {first.n_dof_} joints, the steady part for "
-                f"{second.n_dof_}"
-            )
-        if other_model(first.robot_, first.fingerprint_, second.robot_, second.fingerprint_):
-            raise ModelMismatchError(
-                f"the accelerating part is for robot {first.robot_!r}, the steady part for "
-                f"{second.robot_!r} (or other dynamic parameters); fit both on one model"
-            )
-        if first.kind_ != second.kind_ or not np.allclose(
-            first.gain_, second.gain_, rtol=1e-9, atol=0.0, equal_nan=True
-        ):
-            raise InputValueError(
-                f"the parts watch different residuals: {first.kind_!r} with K_I = "
-                f"{first.gain_.tolist()} and {second.kind_!r} with K_I = {second.gain_.tolist()}"
-            )
+        check_same_residual(first, second, "the accelerating part", "the steady part")
         if self.level_.shape != (first.n_dof_,):
             raise DimensionError(
                 f"level has {self.level_.shape[0]} values; the parts have {first.n_dof_} joints"

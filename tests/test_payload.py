@@ -51,7 +51,7 @@ from sensorless.signals import ObserverSignals
 from sensorless.simulation.payload import Payload, with_payload
 from sensorless.simulation.scenario import Scenario, load_scenario
 from sensorless.simulation.schema import validate_scenario
-from sensorless.thresholds import ConstantThreshold, TimeVariantThreshold
+from sensorless.thresholds import ConstantThreshold, TimeVariantThreshold, load_threshold
 from sensorless.thresholds.payload import PayloadRange, PayloadThreshold, point_parameters
 
 DURATION = 10.0  # s of motion: the "stated amount" of the estimation test
@@ -553,9 +553,66 @@ def test_threshold_refuses_bad_input(
     widened = declared(base, nominal).fit(tuning)
     with pytest.raises(InputValueError, match="needs the joint positions"):
         widened.bounds(dataclasses.replace(loaded, position=None))
-    with pytest.raises(InputValueError, match="cannot be saved yet"):
-        widened.to_dict()
     assert widened.monitored_joints_ == tuple(range(1, 8))
+
+
+# ----------------------------------------------------------------------------- the file
+
+
+def test_a_saved_payload_threshold_gives_the_same_bounds(
+    tuning: ObserverSignals, loaded: ObserverSignals, nominal: sl.RobotModel, tmp_path
+) -> None:
+    """A box range and a ball range survive the file: bounds equal bit for bit."""
+    box = PayloadThreshold(
+        TimeVariantThreshold(margin=0.5), nominal, MAX_MASS, center=CENTRE,
+        half_widths=(0.05, 0.04, 0.1), velocity_error=VELOCITY_ERROR,
+    ).fit(tuning)  # fmt: skip
+    for widened in (declared(ConstantThreshold(margin=0.5), nominal).fit(tuning), box):
+        path = widened.save(tmp_path / "payload.yaml")
+        read = load_threshold(path, robot=nominal)
+        assert isinstance(read, PayloadThreshold)
+        assert read.to_dict() == widened.to_dict()
+        for got, want in zip(read.bounds(loaded), widened.bounds(loaded), strict=True):
+            np.testing.assert_array_equal(got, want)
+        lower, upper = widened.threshold_.bounds(loaded)
+        assert (read.bounds(loaded)[0] <= lower).all() and (read.bounds(loaded)[1] >= upper).all()
+
+
+def test_a_payload_file_reads_its_nominal_model(
+    tuning: ObserverSignals, loaded_log: Log, nominal: sl.RobotModel, tmp_path
+) -> None:
+    """The built-in model of the file's name and fingerprint, or the one given; no other."""
+    path = declared(ConstantThreshold(margin=0.5), nominal).fit(tuning).save(tmp_path / "a.yaml")
+    assert nominal.fingerprint == sl.robots.load(nominal.name).fingerprint  # the exact model
+    read = load_threshold(path)
+    assert isinstance(read, PayloadThreshold) and read.robot.fingerprint == nominal.fingerprint
+    # A model with other parameters under the same name: not a built-in one.
+    other = with_payload(nominal, HEAVIER)
+    signals = observe(loaded_log.slice(0, 1.5), other)
+    path = declared(ConstantThreshold(margin=0.5), other).fit(signals).save(tmp_path / "b.yaml")
+    with pytest.raises(ModelMismatchError, match=r"not a built-in robot .* robot="):
+        load_threshold(path)
+    with pytest.raises(ModelMismatchError, match="fitted with the nominal model"):
+        load_threshold(path, robot=nominal)
+    read = load_threshold(path, robot=other)
+    assert isinstance(read, PayloadThreshold) and read.robot is other
+
+
+def test_a_broken_payload_file_lists_every_problem(
+    tuning: ObserverSignals, nominal: sl.RobotModel
+) -> None:
+    data = declared(ConstantThreshold(margin=0.5), nominal).fit(tuning).to_dict()
+    data["params"] = {**data["params"], "max_mass": -1.0, "center": [0.0, 0.1]}
+    data["attributes"] = {"threshold": data["attributes"]["threshold_"]}
+    with pytest.raises(FileFormatError) as info:
+        PayloadThreshold.from_dict(data, robot=nominal)
+    message = str(info.value)
+    for path in ("params.max_mass", "params.center", "attributes.threshold:", "threshold_"):
+        assert path in message, message
+    wrapped = declared(ConstantThreshold(margin=0.5), nominal).fit(tuning).to_dict()
+    wrapped["attributes"]["threshold_"]["n_dof"] = 6
+    with pytest.raises(FileFormatError, match=r"attributes\.threshold_"):
+        PayloadThreshold.from_dict(wrapped, robot=nominal)
 
 
 @pytest.mark.parametrize(

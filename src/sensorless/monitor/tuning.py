@@ -381,16 +381,22 @@ def save_tuned(path: str | Path, threshold: Threshold, settings: ObserverSetting
     return out
 
 
-def load_tuned(path: str | Path) -> tuple[Threshold, ObserverSettings]:
+def load_tuned(
+    path: str | Path, robot: RobotModel | None = None
+) -> tuple[Threshold, ObserverSettings]:
     """Read a file written by :func:`save_tuned` (or a bare threshold file: default settings).
 
-    A saved calibration comes back as the threshold's ``calibration_``.
+    A saved calibration comes back as the threshold's ``calibration_``;
+    ``robot`` is the nominal model, for a threshold that needs it (``payload``,
+    see :func:`~sensorless.thresholds.load_threshold`).
     """
     data = read_yaml_mapping(path, "threshold")
     settings_data = data.pop("observer", None)
     calibration_data = data.pop("calibration", None)
     try:
-        threshold = threshold_from_dict(data, Threshold, source=f"threshold file {path}")
+        threshold = threshold_from_dict(
+            data, Threshold, source=f"threshold file {path}", robot=robot
+        )
         if calibration_data is not None:
             attach_calibration(threshold, Calibration.from_dict(calibration_data))
     except (InputValueError, InputTypeError) as exc:

@@ -56,6 +56,7 @@ from .file_schema import (
 )
 
 if TYPE_CHECKING:
+    from ..robots.model import RobotModel
     from .base import Threshold
 
 __all__ = [
@@ -74,9 +75,10 @@ __all__ = [
 METHODS: dict[str, type[Threshold]] = {}
 """Threshold classes by their class attribute ``name`` (filled as each family is defined)."""
 
-READERS: dict[str, Callable[[Mapping[str, Any], str], Threshold]] = {}
-"""Readers of the ``method`` of thresholds that hold other thresholds (``phased``): each
-takes the description and its source and checks it itself; filled by their modules."""
+READERS: dict[str, Callable[[Mapping[str, Any], str, RobotModel | None], Threshold]] = {}
+"""Readers of the ``method`` of thresholds that hold other thresholds (``phased``,
+``payload``): each takes the description, its source and the nominal model given
+to the loader (or None), and checks it itself; filled by their modules."""
 
 FAMILY_NAMES = (
     "constant", "time-variant", "hysteretic", "velocity", "velocity-combined", "model", "learned",
@@ -227,6 +229,7 @@ def threshold_from_dict(
     expected: type[Threshold] | None,
     *,
     source: str = "threshold description",
+    robot: RobotModel | None = None,
 ) -> Threshold:
     """Rebuild a fitted threshold from :func:`threshold_to_dict` output.
 
@@ -238,6 +241,9 @@ def threshold_from_dict(
         Family (or base class) the description must hold; None for any.
     source : str
         What ``data`` is, for messages (e.g. ``"threshold file th.yaml"``).
+    robot : RobotModel, optional
+        The nominal model, for a family that needs it to compute its bounds
+        (``payload``); the other families ignore it.
 
     Raises
     ------
@@ -251,7 +257,7 @@ def threshold_from_dict(
     method = data.get("method") if isinstance(data, Mapping) else None
     reader = READERS.get(method) if isinstance(method, str) else None
     if reader is not None:
-        read = reader(data, source)
+        read = reader(data, source, robot)
         if expected is not None and not isinstance(read, expected):
             raise InputValueError(
                 f"the description holds a {method!r} threshold, not {_canonical(expected.name)!r}"
@@ -303,8 +309,10 @@ def save_threshold(threshold: Threshold, path: str | Path) -> Path:
     return out
 
 
-def load_threshold(path: str | Path) -> Threshold:
+def load_threshold(path: str | Path, robot: RobotModel | None = None) -> Threshold:
     """Read a threshold written by ``Threshold.save``.
+
+    ``robot`` is the nominal model, for a family that needs it (``payload``).
 
     Raises
     ------
@@ -314,6 +322,9 @@ def load_threshold(path: str | Path) -> Threshold:
         Not a threshold file: binary, not UTF-8, not YAML, not a mapping, a
         newer format, or a description that does not follow the format (every
         problem with the path of its field).
+    ModelMismatchError
+        A ``payload`` threshold whose nominal model is neither ``robot`` nor
+        the built-in robot of its name.
     """
     data = read_yaml_mapping(path, "threshold")
-    return threshold_from_dict(data, None, source=f"threshold file {path}")
+    return threshold_from_dict(data, None, source=f"threshold file {path}", robot=robot)

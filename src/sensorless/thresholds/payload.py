@@ -47,13 +47,16 @@ threshold fitted already. The payload threshold needs the joint positions in
 its inputs (``ObserverSignals.position``, which observers record, and the
 ``position`` of ``step``).
 
-It is not registered as a family and cannot be saved to a file yet: save the
-wrapped ``threshold_`` and declare the range again with :meth:`from_fitted`.
+It is not a family of its own (``tune(..., payload=...)`` wraps any family).
+Its file (``method: payload``, :mod:`._payload_file`) holds the declared range
+and the wrapped threshold, and names its nominal model, which the reader
+takes from ``load_threshold(path, robot=...)`` or from the built-in robots.
 """
 
 from __future__ import annotations
 
 import copy
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -73,8 +76,10 @@ from ..exceptions import DimensionError, InputTypeError, InputValueError, ModelM
 from ..identification._payload_regressor import PayloadRegressor, filter_coefficients
 from ..robots.model import RobotModel
 from ..signals import ObserverSignals
+from ._payload_file import PAYLOAD_METHOD, payload_to_dict, read_payload
 from .base import StreamBounds, Threshold
 from .checks import regular_period
+from .files import READERS
 from .fitting import BoolArray
 from .state import ThresholdInputs, ThresholdState
 
@@ -385,11 +390,32 @@ class PayloadThreshold(Threshold):
         return ()
 
     def to_dict(self) -> dict[str, Any]:
-        """Not available: a payload threshold has no file format yet (module docstring)."""
-        raise InputValueError(
-            "a PayloadThreshold cannot be saved yet; save its threshold_ and wrap the loaded "
-            "threshold again with PayloadThreshold.from_fitted(threshold, robot, max_mass, ...)"
-        )
+        """The fitted threshold as plain values: the declared range and the wrapped threshold."""
+        self._check_fitted()
+        return payload_to_dict(self)
+
+    @classmethod
+    def from_dict(
+        cls,
+        data: Mapping[str, Any],
+        *,
+        robot: RobotModel | None = None,
+        source: str = "threshold description",
+    ) -> PayloadThreshold:
+        """Rebuild a fitted payload threshold from :meth:`to_dict` output.
+
+        ``robot`` is the nominal model it was fitted with; without it, the
+        built-in robot of the file's name and fingerprint (:mod:`._payload_file`).
+
+        Raises
+        ------
+        FileFormatError
+            The description does not follow the format (every problem with the
+            path of its field).
+        ModelMismatchError
+            ``robot`` is another model, or none was given and no built-in is the file's.
+        """
+        return _read(data, source, robot)
 
     # ----------------------------------------------------------------- delegation
 
@@ -460,6 +486,16 @@ class PayloadThreshold(Threshold):
             zi = filtered[-1]
         startup = state.startup * pole ** psi.shape[0]
         return lower, upper, PayloadThresholdState(state.dt, zi, base, regressor, startup)
+
+
+def _read(data: Mapping[str, Any], source: str, robot: RobotModel | None) -> PayloadThreshold:
+    """The reader of ``payload`` descriptions (:data:`~sensorless.thresholds.files.READERS`)."""
+    threshold = read_payload(data, source, robot, PayloadThreshold.from_fitted)
+    assert isinstance(threshold, PayloadThreshold)  # what from_fitted builds
+    return threshold
+
+
+READERS[PAYLOAD_METHOD] = _read
 
 
 def _filter_held(x: FloatArray, pole: FloatArray, last: FloatArray) -> FloatArray:

@@ -443,7 +443,7 @@ class PhasedThreshold(Threshold):
         return _read(data, source)
 
 
-def _read(data: Mapping[str, Any], source: str) -> PhasedThreshold:
+def _read(data: Mapping[str, Any], source: str, robot: object = None) -> PhasedThreshold:
     """The reader of ``phased`` descriptions (:data:`~sensorless.thresholds.files.READERS`)."""
     threshold = read_phased(data, source, PhasedThreshold.from_fitted)
     assert isinstance(threshold, PhasedThreshold)  # what from_fitted builds

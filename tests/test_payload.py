@@ -19,6 +19,7 @@ velocities (the defaults). Runs of 10 s (three) and 5 s (one): about 8 s of the 
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import doctest
 import importlib
@@ -26,6 +27,8 @@ import itertools
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from scipy.optimize import lsq_linear
 
 import sensorless as sl
@@ -613,6 +616,57 @@ def test_a_broken_payload_file_lists_every_problem(
     wrapped["attributes"]["threshold_"]["n_dof"] = 6
     with pytest.raises(FileFormatError, match=r"attributes\.threshold_"):
         PayloadThreshold.from_dict(wrapped, robot=nominal)
+
+
+def _paths(value: object, prefix: tuple = ()) -> list[tuple]:
+    """Every key path (mappings and lists) of a file's content."""
+    found = [prefix] if prefix else []
+    if isinstance(value, dict):
+        return found + [p for k, v in value.items() for p in _paths(v, (*prefix, k))]
+    if isinstance(value, list):
+        return found + [p for i, v in enumerate(value) for p in _paths(v, (*prefix, i))]
+    return found
+
+
+JUNK = st.sampled_from(["text", None, [], {}, -1.0, float("nan"), float("inf"), True, [1.0]])
+
+
+@settings(
+    max_examples=120, deadline=None, derandomize=True,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)  # fmt: skip
+@given(data=st.data())
+def test_a_mutated_payload_file_is_refused_clearly_or_read_whole(
+    tuning: ObserverSignals, loaded: ObserverSignals, nominal: sl.RobotModel, data: st.DataObject
+) -> None:
+    """Fail-safe reading: one key dropped or replaced by junk gives a clear error, else a
+    threshold whose bounds contain the wrapped threshold's (the widening is never negative)."""
+    original = declared(ConstantThreshold(margin=0.5), nominal).fit(tuning).to_dict()
+    mutated = copy.deepcopy(original)
+    path = data.draw(st.sampled_from(_paths(original)))
+    parent = mutated
+    for key in path[:-1]:
+        parent = parent[key]
+    if data.draw(st.booleans()) and isinstance(parent, dict):
+        del parent[path[-1]]
+    else:
+        parent[path[-1]] = data.draw(JUNK)
+    try:
+        read = PayloadThreshold.from_dict(mutated, robot=nominal)
+    except ModelMismatchError:
+        assert path[0] in ("robot", "fingerprint"), path  # another model: refused as such
+        return
+    except FileFormatError as error:  # the message names the field or an entry holding it
+        names = [
+            "".join(f"[{k}]" if isinstance(k, int) else f".{k}" for k in path[:n]).lstrip(".")
+            for n in range(len(path), 0, -1)
+        ]
+        assert any(name in str(error) for name in names), (path, str(error))
+        return
+    part = rows_of(loaded, slice(0, 300))
+    lower, upper = read.bounds(part)
+    inner_lower, inner_upper = read.threshold_.bounds(part)
+    assert (lower <= inner_lower).all() and (upper >= inner_upper).all()
 
 
 @pytest.mark.parametrize(

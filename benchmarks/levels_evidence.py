@@ -121,19 +121,22 @@ def main() -> None:
     contact_tv, _ = tune(free, nominal, "time-variant", settings, margin_fraction=0.0, folds=None)
     for backend in ("numba", "python"):
         alone = CollisionMonitor(nominal, collision, settings, backend=backend)
-        with_constant = LevelledMonitor(
-            CollisionMonitor(nominal, collision, settings, backend=backend), contact_c
-        )
+        costs = [
+            _step_time(monitor, part, args.repeat)
+            for monitor in (
+                alone,
+                LevelledMonitor(
+                    CollisionMonitor(nominal, collision, settings, backend=backend), contact_c
+                ),
+                LevelledMonitor(
+                    CollisionMonitor(nominal, collision, settings, backend=backend), contact_tv
+                ),
+            )
+        ]
         print(
-            f"stream step [µs], backend {backend}: collision monitor "
-            f"{_step_time(alone, part, args.repeat):.1f}; with a constant contact level "
-            f"{_step_time(with_constant, part, args.repeat):.1f}"
+            f"stream step [µs], backend {backend}: collision monitor {costs[0]:.1f}; with a "
+            f"constant contact level {costs[1]:.1f}; with a time-variant one {costs[2]:.1f}"
         )
-    python = CollisionMonitor(nominal, collision, settings, backend="python")
-    print(
-        "stream step [µs], backend python, time-variant contact level: "
-        f"{_step_time(LevelledMonitor(python, contact_tv), part, args.repeat):.1f}"
-    )
 
 
 if __name__ == "__main__":

@@ -27,6 +27,7 @@ from sensorless.exceptions import (
 from sensorless.io import write_log
 from sensorless.monitor import CollisionMonitor, LevelledMonitor, save_tuned, tune, tune_levels
 from sensorless.report import levels_section, write_report
+from sensorless.robots.recursion import numba_available
 from sensorless.signals import ObserverSignals
 from sensorless.simulation.scenario import load_scenario
 from sensorless.thresholds import (
@@ -341,16 +342,15 @@ def test_monitor_stream_reads_the_observer_signals(panda) -> None:
     nominal, free = panda["nominal"], panda["free"]
     contact, settings = tune(free, nominal, "time-variant", margin_fraction=0.0, folds=None)
     collision, _ = tune(free, nominal, "time-variant", settings, folds=None)
-    compiled = LevelledMonitor(CollisionMonitor(nominal, collision, settings), contact)
-    if compiled.monitor.backend == "numba":
-        with pytest.raises(InputValueError, match="backend='python'"):
-            compiled.step(0.0, free[0].q[0], free[0].tau_m[0])
-    python = CollisionMonitor(nominal, collision, settings, backend="python")
-    levels = LevelledMonitor(python, contact)
     part = panda["hit"].slice(3.3, 4.0)  # the contact of seed 4 and the time before it
-    batch = levels.process(part)
-    assert batch.events
-    _close(_streamed(levels, part), batch.events)
+    # Both stream backends hand the contact level the sample's observer signals: the
+    # compiled one from its committed state, the Python one from its record.
+    for backend in ("python", "numba") if numba_available() else ("python",):
+        monitor = CollisionMonitor(nominal, collision, settings, backend=backend)
+        levels = LevelledMonitor(monitor, contact)
+        batch = levels.process(part)
+        assert batch.events and levels.monitor.backend == backend
+        _close(_streamed(levels, part), batch.events)
 
 
 def test_tune_levels_with_a_phased_contact_band(panda) -> None:
@@ -358,12 +358,13 @@ def test_tune_levels_with_a_phased_contact_band(panda) -> None:
     levels = tune_levels(
         panda["free"], panda["nominal"], contact=phased, collision="constant", folds=None
     )
-    assert levels.monitor.backend == "python"
     fitted = levels.contact
     assert isinstance(fitted, PhasedThreshold)
     assert (fitted.accelerating_.beta_ >= fitted.steady_.beta_).sum() >= 4
     result = levels.process(panda["hit"])
     assert result.counts()["collision"] == len(result.run.events)
+    part = panda["hit"].slice(3.3, 4.0)  # the phase reads the velocity: streamed on any backend
+    _close(_streamed(levels, part), levels.process(part).events)
     with pytest.raises(InputValueError, match="name the family with 'method'"):
         tune_levels(panda["free"], panda["nominal"], contact={"margin": 0.0}, folds=None)
     with pytest.raises(InputTypeError, match="contact must be a family name"):

@@ -43,6 +43,8 @@ _FAMILIES = (ConstantThreshold, TimeVariantThreshold, VelocityThreshold)
 _fused_step, _fused_block = kernel.fused_step, kernel.fused_block
 _FAULT, _EVENT = kernel.FAULT, kernel.EVENT
 _JOINTS_SHIFT, _REASONS, _STATUSES = kernel.JOINTS_SHIFT, kernel.REASONS, kernel.STATUSES
+_THRESHOLD_ROWS = [kernel.MODEL_TORQUE, kernel.FILTERED_FRICTION, kernel.FILTERED_SIGN,
+                   kernel.VELOCITY]  # fmt: skip
 
 
 def unsupported(monitor: CollisionMonitor) -> str:
@@ -227,6 +229,12 @@ class FusedStream:
     def velocity(self) -> FloatArray:
         """The velocity estimate of the last sample run, accepted or not [rad/s]."""
         return self._state[1, kernel.VELOCITY].copy()
+
+    def threshold_rows(self) -> FloatArray:
+        """The observer's model torque, filtered friction and sign [N m, N m, -] and the
+        velocity [rad/s] of the last accepted sample, shape (4, n_dof): what a threshold
+        reads besides the residual (a copy)."""
+        return self._state[0, _THRESHOLD_ROWS]
 
     def refuse(self, time: float) -> None:
         """Record a sample refused before :meth:`run` (the gap rule's pending time)."""

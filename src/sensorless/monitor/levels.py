@@ -26,12 +26,10 @@ The stream and the compiled monitor
 A contact threshold of the constant family needs the residual alone. Every
 other family also reads the observer's model torque, filtered friction and
 sign and the velocity of the sample, which :meth:`CollisionMonitor.step`
-computes but does not hand out: the stream reads them from the monitor's
-record of its last sample, which only the Python path keeps. Such a contact
-threshold therefore needs ``CollisionMonitor(..., backend="python")`` for
-:meth:`~LevelledMonitor.step` (:func:`tune_levels` chooses it); the batch
-form works with either backend. A model-based contact threshold (it reads
-q̈̂) is refused by the stream.
+computes but does not hand out: the stream reads them from the compiled
+stream's committed state (``FusedStream.threshold_rows``), or on the Python
+path from the monitor's record of its last sample. A model-based contact
+threshold (it reads q̈̂) is refused by the stream.
 
 :func:`tune_levels` tunes both levels on collision-free logs. Units SI and
 radians; time along axis 0.
@@ -202,14 +200,14 @@ class LevelledMonitor:
         Raises
         ------
         InputValueError
-            The contact threshold reads observer signals that the monitor's
-            compiled stream does not hand out, or q̈̂ (module docstring): a
-            configuration error, raised at the first sample.
+            The contact threshold reads q̈̂, which the stream does not hand out
+            (module docstring): a configuration error, raised at the first sample.
         """
         monitor = self.monitor
+        fused = monitor._fused
         if self._inputs:
             self._check_stream()
-            monitor._record = []
+            monitor._record = [] if fused is None else None
         try:
             verdict = monitor.step(t, q, tau_m, tau_j, qd=qd)
             record = monitor._record
@@ -221,7 +219,12 @@ class LevelledMonitor:
             ended = self._close(verdict.event)
             return LevelledVerdict("settling", verdict.t, None, verdict, ended)
         residual = verdict.residual
-        if record:
+        if self._inputs and fused is not None:
+            h, friction, sign, velocity = fused.threshold_rows()[:, None]
+            inputs = ThresholdInputs(
+                h, friction, sign, velocity, np.asarray(q, dtype=np.float64).reshape(1, -1)
+            )
+        elif record:
             _, sample, velocity = record[-1]
             inputs = ThresholdInputs(
                 sample.model_torque[None],
@@ -255,13 +258,6 @@ class LevelledMonitor:
         return event
 
     def _check_stream(self) -> None:
-        if self.monitor.backend != "python":
-            raise InputValueError(
-                f"the contact threshold ({type(self.contact).__name__}) reads the observer's "
-                "model torque, friction, sign and velocity at every sample, which the compiled "
-                "stream does not hand out: build the CollisionMonitor with backend='python' "
-                "(or use a constant contact threshold)"
-            )
         if _reads_acceleration(self.contact):
             raise InputValueError(
                 "a model-based contact threshold reads the acceleration estimate, which the "
@@ -341,9 +337,7 @@ def tune_levels(
     policy : StreamPolicy, optional
         Policy of the monitor.
     backend : {"auto", "numba", "python"}
-        Stream backend of the collision monitor; ``"auto"`` picks ``"python"``
-        when the contact threshold needs the observer signals in the stream
-        (module docstring).
+        Stream backend of the collision monitor (:class:`CollisionMonitor`).
 
     Returns
     -------
@@ -374,8 +368,6 @@ def tune_levels(
             options = dict(spec)
             method = options.pop("method")
             fitted[name], _ = tune(logs, robot, method, settings, **{**common, **options})
-    if backend == "auto" and _reads_inputs(fitted["contact"]):
-        backend = "python"
     monitor = CollisionMonitor(
         robot, fitted["collision"], settings, min_duration=min_duration, hold=hold,
         policy=policy, backend=backend,

@@ -1,12 +1,15 @@
-"""Time one streaming step of the learned family's network for 7 joints (median of repeats).
+"""Time one streaming step of the learned family for 7 joints (median of repeats).
 
 Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_learned.py``.
 Prints, in µs per sample (wall clock, median and minimum, and process CPU
-time, median, of 15 runs of 1000 samples), the network step
-(``_cnn.step``), the threshold's public ``step`` (with its input checks)
-and, for scale, the floor of calling Pinocchio from Python once per sample
-(``crba`` + ``computeCoriolisMatrix`` + ``computeGeneralizedGravity`` for
-the Panda, as in ``bench_kernel.py``), with the load average.
+time, median, of 15 runs of 1000 samples; the cases take turns, so that a
+change of the machine's load falls on all of them), the network step
+compiled (``_cnn.step``, numba) and in numpy (``_cnn.step_numpy``, the
+fallback), the threshold's public ``step`` (with its input checks) and, for
+scale, the floor of calling Pinocchio from Python once per sample (``crba``
++ ``computeCoriolisMatrix`` + ``computeGeneralizedGravity`` for the Panda,
+as in ``bench_kernel.py``), the ratio of the threshold's step to that floor,
+and the load average.
 """
 
 from __future__ import annotations
@@ -17,13 +20,21 @@ import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 import sensorless as sl
+from sensorless.learning.training import random_network
 from sensorless.signals import ObserverSignals
-from sensorless.thresholds import LearnedThreshold, LearnedWeights, _cnn, save_weights
+from sensorless.thresholds import (
+    LearnedThreshold,
+    LearnedWeights,
+    _cnn,
+    _cnn_kernel,
+    save_weights,
+)
 
 N_DOF, N_STEPS, REPEATS = 7, 1000, 15
 
@@ -36,17 +47,21 @@ def _network() -> _cnn.Network:
         "output_mean": np.zeros(N_DOF),
         "output_scale": np.ones(N_DOF),
     }
-    return _cnn.random_network(rng, norm)
+    return random_network(rng, norm)
 
 
-def _times(make: Callable[[], Callable[[], None]], clock: Callable[[], float]) -> list[float]:
-    """µs per sample of REPEATS runs; ``make`` (untimed) gives a fresh run."""
-    times = []
+def _times(
+    cases: dict[str, Callable[[], Callable[[], None]]],
+) -> dict[str, tuple[list[float], list[float]]]:
+    """µs per sample (wall, cpu) of REPEATS runs of every case, in turns; ``make`` gives a run."""
+    times: dict[str, tuple[list[float], list[float]]] = {name: ([], []) for name in cases}
     for _ in range(REPEATS):
-        run = make()
-        start = clock()
-        run()
-        times.append((clock() - start) / N_STEPS * 1e6)
+        for name, make in cases.items():
+            run = make()  # untimed: a fresh run
+            wall, cpu = time.perf_counter(), time.process_time()
+            run()
+            times[name][0].append((time.perf_counter() - wall) / N_STEPS * 1e6)
+            times[name][1].append((time.process_time() - cpu) / N_STEPS * 1e6)
     return times
 
 
@@ -69,15 +84,18 @@ def main() -> None:
     net = _network()
     x = np.random.default_rng(1).normal(size=(N_STEPS, 4, N_DOF))
 
-    def network_steps() -> Callable[[], None]:
-        first = _cnn.initial_state(net, x[0])  # steps advance the state in place: a fresh one
+    def network_steps(step: Callable[..., Any]) -> Callable[[], Callable[[], None]]:
+        def make() -> Callable[[], None]:
+            first = _cnn.initial_state(net, x[0])  # steps advance the state in place: a fresh one
 
-        def run() -> None:
-            state = first
-            for row in x:
-                _, _, state = _cnn.step(net, state, row)
+            def run() -> None:
+                state = first
+                for row in x:
+                    _, _, state = step(net, state, row)
 
-        return run
+            return run
+
+        return make
 
     with tempfile.TemporaryDirectory() as folder:
         path = save_weights(
@@ -100,18 +118,26 @@ def main() -> None:
 
             return run
 
-        cases = (
-            ("network step", network_steps),
-            ("threshold.step", threshold_steps),
-            ("Pinocchio floor", _pinocchio_floor),
-        )
-        for name, make in cases:
-            wall = _times(make, time.perf_counter)
-            cpu = statistics.median(_times(make, time.process_time))
+        cases = {
+            "network step": network_steps(_cnn.step),
+            "network (numpy)": network_steps(_cnn.step_numpy),
+            "threshold.step": threshold_steps,
+            "Pinocchio floor": _pinocchio_floor,
+        }
+        for make in cases.values():  # compile (or load numba's cache) before timing
+            make()()
+        times = _times(cases)
+        for name, (wall, cpu) in times.items():
             print(
                 f"{name:16s} {statistics.median(wall):7.1f} µs wall (min {min(wall):5.1f})"
-                f"  {cpu:7.1f} µs cpu  (7 joints, median of {REPEATS} x {N_STEPS} samples)"
+                f"  {statistics.median(cpu):7.1f} µs cpu  "
+                f"(7 joints, median of {REPEATS} x {N_STEPS} samples)"
             )
+    ratio = statistics.median(times["threshold.step"][0]) / statistics.median(
+        times["Pinocchio floor"][0]
+    )
+    print(f"network step compiled: {_cnn_kernel.available} (numba)")
+    print(f"threshold.step / Pinocchio floor: {ratio:.2f} (wall medians)")
     print("Pinocchio floor: crba + computeCoriolisMatrix + computeGeneralizedGravity, Panda")
     print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
 

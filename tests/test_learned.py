@@ -18,6 +18,7 @@ from sensorless.exceptions import (
 )
 from sensorless.learning import SCENARIOS, TrainingRecipe, train_detector
 from sensorless.learning._backward import forward_crops, gradients
+from sensorless.learning.training import random_network
 from sensorless.observers import observe
 from sensorless.signals import ObserverSignals
 from sensorless.simulation.scenario import load_scenario
@@ -42,7 +43,7 @@ def _network(seed: int = 0, channels: int = 8) -> _cnn.Network:
         "output_mean": rng.normal(size=N_DOF),
         "output_scale": rng.uniform(0.5, 2.0, N_DOF),
     }
-    net = _cnn.random_network(rng, norm, channels=channels)
+    net = random_network(rng, norm, channels=channels)
     return net.with_parameters([p + 0.2 * rng.normal(size=p.shape) for p in net.parameters()])
 
 

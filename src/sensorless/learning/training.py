@@ -44,6 +44,7 @@ __all__ = [
     "SCENARIOS",
     "TrainingRecipe",
     "TrainingRun",
+    "random_network",
     "scenario_for",
     "train",
     "train_detector",
@@ -176,12 +177,44 @@ def _crops(
     return np.stack(xs), np.stack(targets), np.stack(weights)
 
 
+def random_network(
+    rng: np.random.Generator,
+    normalisation: dict[str, Any],
+    *,
+    channels: int = 16,
+    dilations: tuple[int, ...] = _cnn.DILATIONS,
+    floor: float = 0.05,
+) -> _cnn.Network:
+    """A network with Glorot-uniform weights from ``rng`` and zero biases (training start)."""
+    n_dof = int(np.shape(normalisation["output_scale"])[0])
+    kernels, biases = [], []
+    c_in = len(_cnn.CHANNELS)
+    for k in range(len(dilations)):
+        limit = np.sqrt(6.0 / (3 * c_in + channels))
+        kernels.append(rng.uniform(-limit, limit, (channels, 3 * c_in)))
+        biases.append(np.zeros((channels, n_dof if k == 0 else 1)))
+        c_in = channels
+    limit = np.sqrt(6.0 / (channels + 2))
+    return _cnn.Network(
+        tuple(kernels),
+        tuple(biases),
+        rng.uniform(-limit, limit, (2, channels)),
+        np.zeros((2, 1)),
+        tuple(int(d) for d in dilations),
+        np.asarray(normalisation["input_mean"], dtype=float),
+        np.asarray(normalisation["input_scale"], dtype=float),
+        np.asarray(normalisation["output_mean"], dtype=float),
+        np.asarray(normalisation["output_scale"], dtype=float),
+        float(floor),
+    )
+
+
 def train(runs: list[TrainingRun], recipe: TrainingRecipe) -> tuple[_cnn.Network, list[float]]:
     """Fit the network on ``runs`` by Adam; the network and the loss of every step."""
     steps = check_int(recipe.steps, "steps", 1, "TrainingRecipe")
     rate = check_scalar(recipe.learning_rate, "learning_rate", "-")
     rng = np.random.default_rng([recipe.seed, 1])  # not the runs' SeedSequence(seed)
-    net = _cnn.random_network(rng, _normalisation(runs), channels=recipe.channels)
+    net = random_network(rng, _normalisation(runs), channels=recipe.channels)
     field = net.receptive_field
     if min(run.x.shape[0] for run in runs) < max(recipe.crop, field):
         raise InputValueError(f"every run needs at least crop = {recipe.crop} samples")

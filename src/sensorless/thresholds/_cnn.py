@@ -28,8 +28,10 @@ index of the last sample. :func:`run` takes that state and any number of new
 samples, computes layer by layer over the whole chunk and returns the outputs
 and a new state; :func:`step` computes one sample and writes it into the
 state's array in place (the old state is then spent, see :class:`CnnState`).
-Both compute the same sums, so stream equals batch to rounding and chunked
-equals whole. A row with a
+With numba installed :func:`step` runs the compiled kernel of
+:mod:`._cnn_kernel` on the same rings (:func:`step_numpy` is the fallback
+and the reference). All compute the same sums, so stream equals batch to
+rounding and chunked equals whole. A row with a
 non-finite input is skipped (NaN outputs, state unchanged), as a stream
 skips a faulty sample. Inputs are clipped to ±``INPUT_CLIP`` normalised
 units, so no finite input can overflow.
@@ -50,6 +52,7 @@ from numpy.typing import NDArray
 
 from .._validation import FloatArray
 from ..exceptions import InputValueError
+from . import _cnn_kernel
 
 __all__ = [
     "CHANNELS",
@@ -58,9 +61,10 @@ __all__ = [
     "CnnState",
     "Network",
     "initial_state",
-    "random_network",
     "run",
     "step",
+    "step_numpy",
+    "step_packed",
 ]
 
 CHANNELS = ("model_torque", "friction", "sign", "velocity")
@@ -150,6 +154,36 @@ class Network:
     @functools.cached_property
     def _stream(self) -> _Stream:
         return _Stream.of(self)
+
+    def packed(self, level: FloatArray, margin: FloatArray, monitored: Any) -> FloatArray:
+        """Constants of the compiled step (:func:`step_packed`) for bounds c ∓ (level·w + margin).
+
+        ``level`` [-] and ``margin`` [N m] of shape (n_dof,); ``monitored`` a
+        boolean mask of shape (n_dof,) (the others get ∓inf).
+        """
+        s = self._stream
+        return _cnn_kernel.pack(
+            self.kernels,
+            s.biases,
+            self.head,
+            self.head_bias[:, 0],
+            {
+                "inverse_scale": s.inverse_scale,
+                "shift": s.shift,
+                "output_scale": self.output_scale,
+                "centre_shift": s.head_shift[0],
+                "level": np.broadcast_to(level, (self.n_dof,)),
+                "margin": np.broadcast_to(margin, (self.n_dof,)),
+                "monitored": np.broadcast_to(monitored, (self.n_dof,)).astype(float),
+            },
+            self.floor,
+        )
+
+    @functools.cached_property
+    def _unit_packed(self) -> FloatArray:
+        """Constants of :func:`step`: level 1, margin 0, every joint (bounds c ∓ w)."""
+        ones = np.ones(self.n_dof)
+        return self.packed(ones, np.zeros(self.n_dof), ones)
 
 
 class _Buffer:
@@ -248,6 +282,7 @@ class _Stream:
     period: int  # time slots: the longest ring
     taps_shape: tuple[int, int, int]  # (n_layers, 3 channels, n_dof)
     reads: list[IntArray]  # per phase: the rows of the taps, layer by layer
+    read_table: IntArray  # the same, (period, 3 n_layers), for the compiled step
 
     @classmethod
     def of(cls, net: Network) -> _Stream:
@@ -286,6 +321,7 @@ class _Stream:
             period,
             (n_layers, 3 * channels, net.n_dof),
             reads,
+            np.ascontiguousarray(np.stack(reads)),
         )
 
     def histories(self, state: CnnState) -> list[FloatArray]:
@@ -389,12 +425,66 @@ def run(net: Network, state: CnnState, x: FloatArray) -> tuple[FloatArray, Float
 def step(net: Network, state: CnnState, x: FloatArray) -> tuple[FloatArray, FloatArray, CnnState]:
     """Centre and width of one sample ``x`` (4, n_dof) after ``state``; the state after it.
 
-    The streaming form of :func:`run` (the same sums, all layers in one
-    batched product), a dozen numpy calls. It advances the rings of
-    ``state`` in place (see :class:`CnnState`). A non-finite ``x`` gives NaN
-    outputs and ``state`` itself, untouched: the sample is checked before
-    anything is written.
+    The streaming form of :func:`run`: compiled (:func:`step_packed`) when
+    numba is installed, else :func:`step_numpy`; both give the outputs of
+    :func:`run` to rounding. It advances the rings of ``state`` in place
+    (see :class:`CnnState`). A non-finite ``x`` gives NaN outputs and
+    ``state`` itself, untouched: the sample is checked before anything is
+    written.
     """
+    if not _cnn_kernel.available:
+        return step_numpy(net, state, x)
+    x = np.asarray(x, dtype=float)
+    done = step_packed(net, state, net._unit_packed, x[0], x[1], x[2], x[3])
+    if done is None:
+        nan = np.full(net.n_dof, np.nan)
+        return nan, nan.copy(), state
+    out, after = done
+    return out[0], out[1], after
+
+
+def step_packed(
+    net: Network,
+    state: CnnState,
+    packed: FloatArray,
+    model_torque: Any,
+    friction: Any,
+    sign: Any,
+    velocity: Any,
+) -> tuple[FloatArray, CnnState] | None:
+    """The compiled step (numba required): rows centre, width, lower, upper (4, n_dof) [N m].
+
+    ``packed`` from :meth:`Network.packed`; the inputs float arrays of shape
+    (n_dof,). None, and ``state`` untouched, if an input is not finite or
+    not n_dof long; a ``TypeError`` if one is not a one-dimensional float64
+    array, an ``InputValueError`` if ``state`` is another network's.
+    """
+    buffer = state.buffer
+    if state.version != buffer.version:
+        state._check_current()
+    s = net._stream
+    t = state.last + 1
+    if t == s.period:
+        t = 0
+    out = np.empty((4, net.n_dof))
+    code = _cnn_kernel.compiled()(
+        buffer.ring, s.read_table, t, packed, model_torque, friction, sign, velocity, out
+    )
+    if code == _cnn_kernel.WRONG_STATE:
+        raise InputValueError(
+            "this network state holds the rings of a network of another shape; use the state "
+            "of this network (initial_state, step, run)"
+        )
+    if code:
+        return None
+    buffer.version += 1
+    return out, CnnState(buffer, t, buffer.version)
+
+
+def step_numpy(
+    net: Network, state: CnnState, x: FloatArray
+) -> tuple[FloatArray, FloatArray, CnnState]:
+    """:func:`step` in numpy (the fallback without numba): all layers in one batched product."""
     buffer = state.buffer
     if state.version != buffer.version:
         state._check_current()
@@ -422,35 +512,3 @@ def step(net: Network, state: CnnState, x: FloatArray) -> tuple[FloatArray, Floa
     width *= net.output_scale
     buffer.version += 1
     return out[0], width, CnnState(buffer, t, buffer.version)
-
-
-def random_network(
-    rng: np.random.Generator,
-    normalisation: dict[str, Any],
-    *,
-    channels: int = 16,
-    dilations: tuple[int, ...] = DILATIONS,
-    floor: float = 0.05,
-) -> Network:
-    """A network with Glorot-uniform weights from ``rng`` and zero biases (training start)."""
-    n_dof = int(np.shape(normalisation["output_scale"])[0])
-    kernels, biases = [], []
-    c_in = len(CHANNELS)
-    for k in range(len(dilations)):
-        limit = np.sqrt(6.0 / (3 * c_in + channels))
-        kernels.append(rng.uniform(-limit, limit, (channels, 3 * c_in)))
-        biases.append(np.zeros((channels, n_dof if k == 0 else 1)))
-        c_in = channels
-    limit = np.sqrt(6.0 / (channels + 2))
-    return Network(
-        tuple(kernels),
-        tuple(biases),
-        rng.uniform(-limit, limit, (2, channels)),
-        np.zeros((2, 1)),
-        tuple(int(d) for d in dilations),
-        np.asarray(normalisation["input_mean"], dtype=float),
-        np.asarray(normalisation["input_scale"], dtype=float),
-        np.asarray(normalisation["output_mean"], dtype=float),
-        np.asarray(normalisation["output_scale"], dtype=float),
-        float(floor),
-    )

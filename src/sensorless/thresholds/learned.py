@@ -25,6 +25,11 @@ time-variant band of eq. (5.33) with γ h + ε_fr f replaced by c(t) and α by
 λ·w(t): wide where the model torque is large, narrow at rest, where a small
 residual is already unusual.
 
+A stream's :meth:`LearnedThreshold.step` runs the network's compiled step
+(:mod:`._cnn_kernel`, numba, the optional extra ``fast``) on its rings and
+returns the bounds from it; without numba, the numpy step. Both give the
+bounds of :meth:`~LearnedThreshold.bounds` to rounding.
+
 Weights (:mod:`._learned_files`): ``weights=None`` takes the weights shipped
 for the fit runs' robot, a name takes shipped ones, a path a trained file.
 The network counts samples: signals at another sample period than the
@@ -44,14 +49,15 @@ from pathlib import Path
 from typing import Any, cast
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._validation import FloatArray
 from ..exceptions import DimensionError, InputTypeError, InputValueError
 from ..signals import ObserverSignals
-from . import _cnn
+from . import _cnn, _cnn_kernel
 from ._learned_files import LearnedWeights, load_weights
 from .base import StreamBounds, Threshold
-from .checks import check_inputs_finite, robot_mismatch
+from .checks import check_inputs_finite, check_joints, robot_mismatch
 from .fitting import BoolArray
 from .state import ThresholdInputs, ThresholdState
 
@@ -122,6 +128,8 @@ class LearnedThreshold(Threshold):
         # a path is kept as text: the threshold file names it
         self.weights = str(weights) if isinstance(weights, Path) else weights
         self._loaded: tuple[Any, LearnedWeights] | None = None
+        # (level_, margin_, joints, weights) when packed, the network, its compiled step's constants
+        self._compiled: tuple[tuple[Any, ...], _cnn.Network, FloatArray] | None = None
 
     # ----------------------------------------------------------------- the network
 
@@ -216,14 +224,15 @@ class LearnedThreshold(Threshold):
         weights = self._weights_for(self.robot_)
         self._check_period(weights, dt)
         first = self._stacked(inputs)[0]
+        self._packed()  # the compiled step's constants, before the first sample
         return LearnedState(dt, np.zeros(0), _cnn.initial_state(weights.network, first))
 
     def _run(self, state: ThresholdState, inputs: ThresholdInputs) -> StreamBounds:
         state = cast(LearnedState, state)  # checked by the public entry points
         network = self._weights_for(self.robot_).network
-        if inputs.model_torque.shape[0] == 1:  # a stream's step: the fewest numpy calls
+        if inputs.model_torque.shape[0] == 1:  # a stream's step without numba: the numpy step
             x = np.concatenate([getattr(inputs, name) for name in _cnn.CHANNELS])
-            centre, width, after = _cnn.step(network, state.network, x)
+            centre, width, after = _cnn.step_numpy(network, state.network, x)
             width *= self.level_
             width += self.margin_
             return (
@@ -234,6 +243,95 @@ class LearnedThreshold(Threshold):
         centre, width, after = _cnn.run(network, state.network, self._stacked(inputs))
         half = self.level_ * width + self.margin_
         return centre - half, centre + half, LearnedState(state.dt, state.zi, after)
+
+    # ----------------------------------------------------------------- the compiled stream
+
+    def _packed(self) -> tuple[_cnn.Network, FloatArray] | None:
+        """Network and constants of the compiled step for the fitted λ, margin and joints.
+
+        None without numba. Packed again when ``level_``, ``margin_``,
+        ``joints`` or ``weights`` is another object than when last packed.
+        """
+        if not _cnn_kernel.available:
+            return None
+        key = (self.level_, self.margin_, self.joints, self.weights)
+        compiled = self._compiled
+        if compiled is None or any(a is not b for a, b in zip(compiled[0], key, strict=True)):
+            network = self._weights_for(self.robot_).network
+            monitored = np.zeros(self.n_dof_, dtype=bool)
+            monitored[np.asarray(check_joints(self.joints, self.n_dof_)) - 1] = True
+            compiled = (key, network, network.packed(self.level_, self.margin_, monitored))
+            self._compiled = compiled
+        return compiled[1], compiled[2]
+
+    def _step_checked(self, state: ThresholdState, inputs: ThresholdInputs) -> StreamBounds:
+        packed = self._packed()
+        if packed is None:
+            return super()._step_checked(state, inputs)
+        state = cast(LearnedState, state)
+        done = _cnn.step_packed(
+            packed[0],
+            state.network,
+            packed[1],
+            inputs.model_torque[0],
+            inputs.friction[0],
+            inputs.sign[0],
+            inputs.velocity[0],
+        )
+        if done is None:  # a non-finite input: NaN bounds, the state as it was (as _cnn.step)
+            nan = np.full(self.n_dof_, np.nan)
+            return nan, nan.copy(), state
+        out, after = done
+        return out[2], out[3], _next(state, after)
+
+    def step(
+        self,
+        state: ThresholdState,
+        model_torque: ArrayLike,
+        friction: ArrayLike,
+        sign: ArrayLike,
+        velocity: ArrayLike,
+        *,
+        position: ArrayLike | None = None,
+        acceleration: ArrayLike | None = None,
+    ) -> StreamBounds:
+        """Bounds at one sample of a stream (see :meth:`Threshold.step`).
+
+        With numba, a sample of four float arrays of shape (n_dof,) and a
+        state of this stream goes straight to the compiled step, which
+        checks finiteness before it writes anything; any other sample, and a
+        non-finite one, takes the checked path of every family (same
+        result, or the same error).
+        """
+        compiled = self._compiled
+        if (
+            compiled is not None
+            and type(state) is LearnedState
+            and position is None
+            and acceleration is None
+            and compiled[0][0] is self.level_
+            and compiled[0][1] is self.margin_
+            and compiled[0][2] is self.joints
+            and compiled[0][3] is self.weights
+        ):
+            try:
+                done = _cnn.step_packed(
+                    compiled[1], state.network, compiled[2], model_torque, friction, sign, velocity
+                )
+            except TypeError:  # not four float64 arrays: the checked path converts or says why
+                done = None
+            if done is not None:
+                out, after = done
+                return out[2], out[3], _next(state, after)
+        return super().step(
+            state,
+            model_torque,
+            friction,
+            sign,
+            velocity,
+            position=position,
+            acceleration=acceleration,
+        )
 
     # ----------------------------------------------------------------- the score
 
@@ -257,3 +355,17 @@ class LearnedThreshold(Threshold):
         """Collision score |r̂ - c|/w of every sample and joint [-] (compare with ``level_``)."""
         centre, width = self.predict(signals)
         return np.asarray(np.abs(signals.residual - centre) / width)
+
+
+def _next(state: LearnedState, network: _cnn.CnnState) -> LearnedState:
+    """``state`` with the network's next state, made without the frozen dataclass's ``__init__``.
+
+    Its field-by-field ``object.__setattr__`` costs about 1 µs, a few per cent
+    of a compiled step.
+    """
+    new = object.__new__(LearnedState)
+    fields = new.__dict__
+    fields["dt"] = state.dt
+    fields["zi"] = state.zi
+    fields["network"] = network
+    return new

@@ -331,7 +331,9 @@ def test_the_stream_equals_the_batch(loaded: ObserverSignals, nominal: sl.RobotM
             state = estimator.process(state, q[a:b], qd[a:b], r[a:b])
     stream = estimator.estimate(state)
     np.testing.assert_allclose(stream.parameters, batch.parameters, rtol=0, atol=1e-9)
-    np.testing.assert_allclose(stream.covariance, batch.covariance, rtol=1e-9, atol=1e-15)
+    # Entries near zero carry the round-off of the whole matrix: absolute tolerance to its scale.
+    scale = np.abs(batch.covariance).max()
+    np.testing.assert_allclose(stream.covariance, batch.covariance, rtol=1e-9, atol=1e-10 * scale)
     assert (stream.n_samples, stream.n_blocks) == (batch.n_samples, batch.n_blocks) == (3750, 38)
 
 

@@ -164,6 +164,20 @@ class DriftingFriction:
         """Seed of the offset drift."""
         return self._seed
 
+    @property
+    def offset_components(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Amplitude [N m], angular frequency [rad/s] and phase [rad] of the offset's sines.
+
+        Each of shape (n_dof, n_sines): the offset of joint j at time t is
+        Σ_i a_ji (sin(ω_ji t + φ_ji) − sin φ_ji), drawn from ``seed``.
+        """
+        return self._amplitude, self._omega, self._phase
+
+    @property
+    def base_viscous(self) -> FloatArray:
+        """The base model's viscous coefficient per joint [N m s/rad] (0 without one)."""
+        return self._viscous
+
     def __repr__(self) -> str:
         return (
             f"DriftingFriction({self._base!r}, warmup={self._warmup.tolist()}, "

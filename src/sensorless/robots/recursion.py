@@ -42,7 +42,7 @@ try:
 except ImportError:  # numba is an optional extra
     _numba_kernels = None
 
-__all__ = ["BACKENDS", "MomentumTerms", "numba_available"]
+__all__ = ["BACKENDS", "MomentumTerms", "frame_with_z", "joint_axis", "numba_available"]
 
 #: Backend names accepted by :class:`MomentumTerms`.
 BACKENDS = ("auto", "numba", "numpy")
@@ -61,15 +61,19 @@ def _skew(v: FloatArray) -> FloatArray:
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
-def _frame_with_z(axis: FloatArray) -> FloatArray:
-    """A rotation whose third column is the unit vector ``axis`` (the identity for +z)."""
+def frame_with_z(axis: FloatArray) -> FloatArray:
+    """A rotation whose third column is the unit vector ``axis`` (the identity for +z).
+
+    The kernels work in each joint's canonical frame, its placement frame turned
+    by this rotation so that the joint's axis is z.
+    """
     helper = np.eye(3)[int(np.argmin(np.abs(axis)))]
     first = helper - (helper @ axis) * axis
     first /= np.linalg.norm(first)
     return np.column_stack([first, np.cross(axis, first), axis])
 
 
-def _joint_axis(model: pin.Model, j: int) -> tuple[int, FloatArray]:
+def joint_axis(model: pin.Model, j: int) -> tuple[int, FloatArray]:
     """Kind (0 revolute, 1 prismatic) and unit axis of joint ``j``; ModelError otherwise."""
     joint = model.joints[j]
     kind_name = joint.shortname()
@@ -172,8 +176,8 @@ class MomentumTerms:
         consts = np.zeros((n_dof, 28))
         frames = []
         for k in range(n_dof):
-            kind, axis = _joint_axis(model, k + 1)
-            frames.append(_frame_with_z(axis))
+            kind, axis = joint_axis(model, k + 1)
+            frames.append(frame_with_z(axis))
             parent = int(model.parents[k + 1]) - 1
             consts[k, 23:25] = parent, kind
             if parent < 0:

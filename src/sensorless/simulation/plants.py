@@ -14,6 +14,10 @@ per stage. Friction that drifts with time
 (:class:`~sensorless.friction.drift.DriftingFriction`) is evaluated at the
 state's time ``t``, held over the period (it changes over minutes). Units SI,
 radians; joint vectors have shape (n_dof,).
+
+These ``advance`` methods are the reference; the same periods compiled with
+numba are :class:`sensorless.simulation.compiled.CompiledPlant`, which the
+simulator uses when it can (``simulate(..., backend="numpy")`` keeps these).
 """
 
 from __future__ import annotations

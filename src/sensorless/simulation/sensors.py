@@ -225,6 +225,17 @@ class SensorModel:
             values = np.where(resolution > 0.0, np.round(values / step) * step, values)
         return self._reading(values, "position_noise", rng, single)
 
+    def position_parameters(self, n_dof: int) -> tuple[FloatArray, FloatArray]:
+        """Encoder step [rad] and position-noise standard deviation [rad], each (n_dof,).
+
+        What :meth:`position_reader` applies, for a compiled loop that reads
+        the encoder itself (0 = no quantisation, no noise on that joint).
+        """
+        return (
+            self._per_joint("encoder_resolution", n_dof).copy(),
+            self._per_joint("position_noise", n_dof).copy(),
+        )
+
     def position_reader(
         self, n_dof: int, rng: np.random.Generator | None = None
     ) -> Callable[[FloatArray], FloatArray]:

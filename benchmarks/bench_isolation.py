@@ -10,7 +10,11 @@ compares them with the simulator's ground truth.
 Cost, median of ``--repeat`` runs: ``Isolator.isolate_events`` per event [µs];
 ``Isolator.step`` per stream sample [µs], on the samples of the events (where
 a joint is outside its band) and on the others (which return at once);
-one ``CollisionMonitor.step`` for comparison [µs].
+one ``CollisionMonitor.step`` for comparison [µs]; and what ``sensorless
+benchmark`` spends per event of a collision run
+(:func:`sensorless.benchmark.contacts.score_events`: the isolation at the
+event's peak, the ground truth's force over every contact sample, the class)
+[ms].
 
     .venv/bin/python benchmarks/bench_isolation.py [--scenario panda-gaz ...]
         [--seconds S] [--repeat 3] [--search all|pruned]
@@ -25,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from sensorless.benchmark.contacts import DetectorRun, score_events
 from sensorless.evaluation import evaluate_isolation
 from sensorless.isolation import Isolator
 from sensorless.monitor import CollisionMonitor, tune
@@ -114,6 +119,27 @@ def _costs(found: dict[str, Any], isolator: Isolator, test: Any, repeat: int) ->
     print(f"  CollisionMonitor.step: {1e6 * float(np.median(monitor_times)):.1f} us (median)")
 
 
+def _benchmark_cost(
+    found: dict[str, Any], isolator: Isolator, scenario: Scenario, test: Any, repeat: int
+) -> None:
+    """Wall time of the benchmark's per-run scoring (score_events), per event."""
+    events = found["events"]
+    if not events:
+        return
+    run = DetectorRun(events, found["signals"], found["bounds"], isolator)
+    true_robot = scenario.robots()[0]
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        score_events([run], test, true_robot, max_delay=0.5)
+        times.append((time.perf_counter() - start) / len(events))
+    print(
+        f"  benchmark score_events: {1e3 * statistics.median(times):,.1f} ms per event "
+        f"(isolation, true force over {int((test.collision_id > 0).sum())} contact samples, "
+        f"class; {len(events)} events, median of {repeat})"
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenario", nargs="+", default=["panda-gaz"])
@@ -132,6 +158,7 @@ def main() -> None:
         found, isolator, _ = _accuracy(name, "model", scenario, nominal, free, test, args.search)
         _accuracy(name, "exact", scenario, exact, free, test, args.search)
         _costs(found, isolator, test, args.repeat)
+        _benchmark_cost(found, isolator, scenario, test, args.repeat)
 
 
 if __name__ == "__main__":

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import io
+import json
 import logging
 import os
 import sys
@@ -29,6 +30,7 @@ from sensorless.benchmark import (
 )
 from sensorless.exceptions import InputValueError, UnknownNameError
 from sensorless.friction import Sigmoid
+from sensorless.io import read_log
 from sensorless.monitor import ObserverSettings
 from sensorless.simulation.scenario import load_scenario
 
@@ -185,6 +187,9 @@ def _assert_same(result, reference) -> None:
         assert _parquet(result.tables[name]) == _parquet(table), name
     assert _parquet(result.summary()) == _parquet(reference.summary())
     assert _parquet(result.by_force()) == _parquet(reference.by_force())
+    # The events table holds the isolation and classification columns; their summaries:
+    assert _parquet(result.contacts()) == _parquet(reference.contacts())
+    assert _parquet(result.confusion()) == _parquet(reference.confusion())
 
 
 def test_dask_equals_serial_byte_for_byte(serial, client) -> None:
@@ -284,6 +289,18 @@ def test_the_oracle_is_never_later_than_a_method_beyond_the_filter_delay(serial)
     assert compared >= 2
 
 
+def test_without_interactions_the_collision_runs_are_the_scenarios_own(serial) -> None:
+    result, logs = serial
+    assert TINY.scenarios[0].interactions is None
+    spec = next(s for s in plan_runs(TINY) if s.role == "collision")
+    written = read_log(logs / "panda-gaz" / f"collision-{spec.index:03d}.parquet")
+    again = TINY.scenarios[0].load().run(seed=spec.seed, collisions=True).log
+    assert written.metadata["collisions"] == json.loads(json.dumps(again.metadata["collisions"]))
+    np.testing.assert_array_equal(written.tau_m, again.tau_m)
+    runs = result.tables["runs"].set_index(["role", "run"])
+    assert runs.loc[("collision", spec.index), "n_contacts"] == len(again.metadata["collisions"])
+
+
 def test_the_logs_go_through_fsspec_and_the_outputs_are_written(serial, tmp_path) -> None:
     result, logs = serial
     written = sorted(p.relative_to(logs).as_posix() for p in logs.rglob("*.parquet"))
@@ -292,7 +309,9 @@ def test_the_logs_go_through_fsspec_and_the_outputs_are_written(serial, tmp_path
     summary = pd.read_csv(paths["summary_csv"])
     assert list(summary["method"]) == ["constant", "time-variant", "oracle"]
     assert pd.read_parquet(paths["events"]).equals(result.tables["events"])
-    for name in ("detection_vs_force", "delays", "false_alarms"):
+    for name in ("detection_vs_force", "delays", "false_alarms", "force_estimates"):
         assert paths[name].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     page = paths["index"].read_text(encoding="utf-8")
-    assert all(paths[name].name in page for name in ("summary", "events", "delays"))
+    names = ("summary", "events", "delays", "contacts", "confusion", "force_estimates")
+    assert all(paths[name].name in page for name in names)
+    assert pd.read_csv(paths["confusion_csv"]).equals(result.confusion())

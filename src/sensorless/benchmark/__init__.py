@@ -10,6 +10,11 @@ Dask (:mod:`.engine`), with the same results either way. The
 :class:`BenchmarkResult` holds a table of every run, result, collision and
 event (:mod:`.tables`), gives a summary per method with Wilson and Poisson
 intervals, and writes Parquet/CSV tables, PNG figures and an ``index.html``.
+Every event of a collision run is also isolated (link, point, force) and
+classified (intended contact or collision) against the ground truth
+(:mod:`.contacts`; :meth:`BenchmarkResult.contacts`, :meth:`BenchmarkResult.confusion`);
+``BenchmarkScenario(interactions=n)`` fills the collision runs with the
+simulator's guiding hands, clamps and impacts so that both classes occur.
 
 Examples
 --------

@@ -12,6 +12,7 @@ forces [N], times [s], rates per hour.
 
 from __future__ import annotations
 
+import inspect
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -23,6 +24,7 @@ import numpy as np
 from .._validation import check_duration, check_int, check_scalar
 from ..exceptions import InputTypeError, InputValueError, UnknownNameError
 from ..monitor import METHOD_NAMES
+from ..simulation.interactions import RANGES, draw_interactions
 from ..simulation.scenario import Scenario, load_scenario
 
 __all__ = [
@@ -63,21 +65,37 @@ class BenchmarkScenario:
     residuals : sequence of {"motor", "joint"}
         Residuals the momentum methods watch (``"joint"``: r̂_s of eq. 4.9,
         robots with joint torque sensors); one oracle per residual.
+    interactions : int, optional
+        Each collision run carries this many of the simulator's random
+        interactions instead of the scenario's own contacts: guiding hands
+        (intended), clamps and impacts (collisions), drawn and labelled by
+        :func:`~sensorless.simulation.interactions.simulate_interactions` from
+        the run's seed, so that the classification's confusion table has both
+        classes. None (default): the scenario's own contacts, as without the option.
     """
 
     scenario: str | Path | Scenario
     duration: float | None = None
     joints: tuple[int, ...] | None = None
     residuals: tuple[str, ...] = ("motor",)
+    interactions: int | None = None
 
     def load(self) -> Scenario:
-        """The :class:`Scenario`, cut to :attr:`duration`."""
+        """The :class:`Scenario`, cut to :attr:`duration`.
+
+        Raises
+        ------
+        InputValueError
+            :attr:`interactions` contacts of the longest kind would not fit in a run.
+        """
         scenario = (
             self.scenario if isinstance(self.scenario, Scenario) else load_scenario(self.scenario)
         )
-        if self.duration is None:
-            return scenario
-        return scenario.with_duration(check_scalar(self.duration, "duration", "s"))
+        if self.duration is not None:
+            scenario = scenario.with_duration(check_scalar(self.duration, "duration", "s"))
+        if self.interactions is not None:
+            _check_room(self.interactions, scenario)
+        return scenario
 
 
 @dataclass(frozen=True)
@@ -148,6 +166,12 @@ class BenchmarkConfig:
         Contacts with a peak force at least this [N] make the "strong" rate.
     min_duration, hold : float
         Detector settings [s] of the monitor.
+    isolation : bool
+        Isolate (link, point, force) and classify (intended or collision)
+        every event of the collision runs (:mod:`.contacts`): the contact
+        columns of the events table, :meth:`BenchmarkResult.contacts` and
+        :meth:`BenchmarkResult.confusion`. False: detection only, those
+        columns empty.
     max_delay : float
         Time [s] after a contact during which an event still detects it
         (:func:`sensorless.evaluation.evaluate`).
@@ -168,6 +192,7 @@ class BenchmarkConfig:
     strong_force: float = 20.0
     min_duration: float = 0.005
     hold: float = 0.05
+    isolation: bool = True
     max_delay: float = 0.5
     confidence: float = 0.95
 
@@ -204,12 +229,16 @@ class BenchmarkConfig:
         check_duration(self.max_delay, "max_delay")
         if not 0.0 < float(self.confidence) < 1.0:
             raise InputValueError(f"confidence must be in (0, 1); got {self.confidence!r}")
+        if not isinstance(self.isolation, bool):
+            raise InputTypeError(f"isolation must be True or False; got {self.isolation!r}")
         for choice in self.scenarios:
             if not choice.residuals or set(choice.residuals) - {"motor", "joint"}:
                 raise InputValueError(
                     "residuals must be a non-empty subset of ('motor', 'joint'); got "
                     f"{choice.residuals!r}"
                 )
+            if choice.interactions is not None:
+                check_int(choice.interactions, "interactions", 1, "BenchmarkScenario")
 
     def detections(self, choice: BenchmarkScenario) -> list[Detection]:
         """The detectors scored on one scenario: every method on every residual, then oracles.
@@ -229,6 +258,30 @@ class BenchmarkConfig:
                 label = f"{ORACLE} (joint)" if kind == "joint" else ORACLE
                 plan.append(Detection(label, self.oracle_method, kind, oracle=True))
         return plan
+
+
+def _longest_interaction() -> float:
+    """Longest window [s] :func:`draw_interactions` can draw, from its ranges (:data:`RANGES`)."""
+    guiding, clamp, impact = RANGES["guiding"], RANGES["clamp"], RANGES["impact"]
+    build = clamp["peak"][1] / (clamp["stiffness"][0] * clamp["speed"][0])
+    return max(
+        sum(guiding[key][1] for key in ("ramp", "hold", "release")),
+        build + clamp["hold"][1] + clamp["release"][1],
+        impact["duration"][1],
+    )
+
+
+def _check_room(count: int, scenario: Scenario) -> None:
+    """``count`` interactions of the longest kind fit in a run, with the draw's gaps and margins."""
+    defaults = inspect.signature(draw_interactions).parameters
+    gap, margin = defaults["min_gap"].default, defaults["margin"].default
+    needed = count * _longest_interaction() + (count - 1) * gap + 2 * margin
+    if needed > scenario.duration:
+        raise InputValueError(
+            f"interactions: {count} random interactions may need {needed:g} s (longest "
+            f"{_longest_interaction():g} s each, {gap:g} s apart, {margin:g} s margins) but "
+            f"{scenario.name!r} runs {scenario.duration:g} s; lower interactions or raise duration"
+        )
 
 
 def _seeds(sequence: np.random.SeedSequence, count: int) -> list[int]:

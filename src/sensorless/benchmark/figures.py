@@ -2,6 +2,7 @@
 
 One panel per scenario in each figure; the oracle is drawn dashed / hatched.
 Rates carry their Wilson (detection) or exact Poisson (false alarms) interval.
+With isolation, a fourth: estimated vs true force magnitude per scored event.
 """
 
 from __future__ import annotations
@@ -12,6 +13,8 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+
+from ..isolation import QUASI_STATIC_LIMITS
 
 __all__ = ["write_figures"]
 
@@ -105,15 +108,59 @@ def false_alarm_figure(summary: pd.DataFrame, path: Path) -> Path:
     return _save(figure, path)
 
 
+def force_figure(summary: pd.DataFrame, events: pd.DataFrame, path: Path) -> Path:
+    """|F̂| vs the true |F| at the isolated sample, per scored event and method; y = x dotted.
+
+    Symmetric log axes (linear below 1 N).
+    """
+    scenarios = list(dict.fromkeys(summary["scenario"]))
+    figure, axes = _panels(len(scenarios), height=4.2)
+    scored = events[(events["role"] == "collision") & (events["contact"].fillna(0) > 0)]
+    for axis, scenario in zip(axes, scenarios, strict=True):
+        here = scored[scored["scenario"] == scenario]
+        top = 1.0
+        for method in summary.loc[summary["scenario"] == scenario, "method"]:
+            part = here[here["method"] == method]
+            true = part["force_true"].to_numpy(dtype=float, na_value=np.nan)
+            estimate = part["force_estimated"].to_numpy(dtype=float, na_value=np.nan)
+            oracle = _is_oracle(summary, scenario, method)
+            axis.scatter(
+                true, estimate, s=18, label=method, marker="x" if oracle else "o",
+                alpha=0.7,
+            )  # fmt: skip
+            finite = np.concatenate([true, estimate])
+            finite = finite[np.isfinite(finite)]
+            top = max(top, float(finite.max()) if finite.size else 0.0)
+        axis.plot([0.0, top], [0.0, top], ":", color="grey", label="|F̂| = |F|")
+        axis.axhline(QUASI_STATIC_LIMITS[0], color="red", linewidth=0.8, linestyle="--",
+                     label=f"ISO/TS 15066 {QUASI_STATIC_LIMITS[0]:g} N")  # fmt: skip
+        # Outliers (a contact beyond the monitored joints) span decades: symmetric log axes.
+        axis.set_xscale("symlog", linthresh=1.0)
+        axis.set_yscale("symlog", linthresh=1.0)
+        axis.set_xlim(left=0.0)
+        axis.set_ylim(bottom=0.0)
+        axis.set(title=scenario, xlabel="true |F| at the isolated sample [N]",
+                 ylabel="estimated |F̂| [N]")  # fmt: skip
+        axis.grid(alpha=0.3)
+        axis.legend(fontsize="small")
+    return _save(figure, path)
+
+
 def write_figures(
     summary: pd.DataFrame,
     by_force: pd.DataFrame,
     tables: Mapping[str, pd.DataFrame],
     out: Path,
+    isolation: bool = False,
 ) -> dict[str, Path]:
-    """The three PNG figures in ``out``, by name."""
-    return {
+    """The PNG figures in ``out``, by name (the force figure with ``isolation``)."""
+    written = {
         "detection_vs_force": detection_figure(summary, by_force, out / "detection_vs_force.png"),
         "delays": delay_figure(summary, tables["collisions"], out / "delays.png"),
         "false_alarms": false_alarm_figure(summary, out / "false_alarms.png"),
     }
+    if isolation:
+        written["force_estimates"] = force_figure(
+            summary, tables["events"], out / "force_estimates.png"
+        )
+    return written

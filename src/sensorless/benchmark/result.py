@@ -16,6 +16,14 @@ Summary columns (one row per scenario and detector; rates with intervals at
   the detector's delay minus the oracle's) [s];
 * ``eff`` (mean over the monitored joints) and ``eff_joints``: eff = α/β of
   the time-variant families (Table 5.7), NaN elsewhere.
+
+With ``config.isolation`` (the default), :meth:`BenchmarkResult.contacts`
+gives the isolation and classification of the events of the collision runs
+per scenario and detector (link rate with its Wilson interval, point and
+force errors, accuracy: :func:`~.tables.contact_summary`) and
+:meth:`BenchmarkResult.confusion` the confusion table
+(:func:`~.tables.confusion_table`); the per-event values are columns of the
+events table (:mod:`.contacts`).
 """
 
 from __future__ import annotations
@@ -29,7 +37,13 @@ import pandas as pd
 
 from .config import BenchmarkConfig, check_config
 from .engine import Progress, execute
-from .tables import detection_by_force, record_tables, summary_table
+from .tables import (
+    confusion_table,
+    contact_summary,
+    detection_by_force,
+    record_tables,
+    summary_table,
+)
 from .tasks import BeforeTask, Tuned, tuning_record
 
 __all__ = ["BenchmarkResult", "run_benchmark"]
@@ -67,6 +81,18 @@ class BenchmarkResult:
         """Detection rate per peak-force bin with Wilson intervals (:func:`detection_by_force`)."""
         return detection_by_force(self.tables, self.config)
 
+    def contacts(self) -> pd.DataFrame:
+        """Isolation and classification per scenario and detector.
+
+        See :func:`~.tables.contact_summary`; no scored events (NaN rates)
+        with ``config.isolation`` False.
+        """
+        return contact_summary(self.tables, self.tuned, self.config)
+
+    def confusion(self) -> pd.DataFrame:
+        """True class × assigned class of the scored events (:func:`~.tables.confusion_table`)."""
+        return confusion_table(self.tables, self.tuned)
+
     def write(self, out_dir: str | Path) -> dict[str, Path]:
         """Write every table (Parquet; summaries also CSV), the figures and ``index.html``.
 
@@ -84,7 +110,12 @@ class BenchmarkResult:
         for name, table in self.tables.items():
             written[name] = _parquet(table, out / f"{name}.parquet")
         summary, by_force = self.summary(), self.by_force()
-        for name, table in (("summary", summary), ("by_force", by_force)):
+        outputs = [("summary", summary), ("by_force", by_force)]
+        contacts = confusion = None
+        if self.config.isolation:
+            contacts, confusion = self.contacts(), self.confusion()
+            outputs += [("contacts", contacts), ("confusion", confusion)]
+        for name, table in outputs:
             written[name] = _parquet(table, out / f"{name}.parquet")
             table.to_csv(out / f"{name}.csv", index=False)
             written[f"{name}_csv"] = out / f"{name}.csv"
@@ -94,8 +125,10 @@ class BenchmarkResult:
             json.dumps(_config_dict(self.config), indent=2, default=str), encoding="utf-8"
         )
         written["config"] = out / "config.json"
-        written.update(write_figures(summary, by_force, self.tables, out))
-        written["index"] = write_index(out, summary, by_force, written, self.config)
+        written.update(write_figures(summary, by_force, self.tables, out, contacts is not None))
+        written["index"] = write_index(
+            out, summary, by_force, written, self.config, contacts, confusion
+        )
         return written
 
 

@@ -10,12 +10,14 @@ Record tables (one row per ...):
   runs): start, end [s], peak force [N], detected, start and end delays [s];
 * ``events``: detected event: start, end [s], joints, peak excursion [N m],
   outcome (``detection``, ``false_alarm``, ``excused``) and the collision
-  ids it detects.
+  ids it detects; on collision runs also its isolation and class against the
+  ground truth (:data:`~sensorless.benchmark.contacts.CONTACT_COLUMNS`).
 
-:func:`summary_table` and :func:`detection_by_force` reduce them with
+:func:`summary_table`, :func:`detection_by_force` and :func:`contact_summary` reduce them with
 Wilson intervals for detection rates (``scipy.stats.binomtest(...).
 proportion_ci(method="wilson")``) and exact Poisson intervals for false alarms
-per hour (:func:`sensorless.monitor.poisson_interval`).
+per hour (:func:`sensorless.monitor.poisson_interval`); :func:`confusion_table`
+counts the classes.
 """
 
 from __future__ import annotations
@@ -29,12 +31,16 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from ..classification import KINDS
 from ..monitor import poisson_interval
 from .config import ORACLE, BenchmarkConfig
+from .contacts import CONTACT_COLUMNS
 from .tasks import RunRecords, Tuned, efficiency
 
 __all__ = [
     "COLUMNS",
+    "confusion_table",
+    "contact_summary",
     "detection_by_force",
     "oracle_label",
     "record_tables",
@@ -61,7 +67,7 @@ COLUMNS: dict[str, dict[str, str]] = {
     "events": {
         **_KEYS, "method": "string", "start": "float64", "end": "float64", "joints": "string",
         "peak": "float64", "peak_residual": "float64", "outcome": "string",
-        "collisions": "string",
+        "collisions": "string", **CONTACT_COLUMNS,
     },
 }  # fmt: skip
 """Columns and dtypes of the record tables."""
@@ -224,3 +230,102 @@ def detection_by_force(tables: Mapping[str, pd.DataFrame], config: BenchmarkConf
     columns = ["scenario", "method", "bin", "force_low", "force_high", "n", "n_detected", "rate",
                "low", "high"]  # fmt: skip
     return pd.DataFrame(rows, columns=columns)
+
+
+def _scored(tables: Mapping[str, pd.DataFrame]) -> pd.DataFrame:
+    """Events of collision runs matched to a contact (``contact`` > 0)."""
+    events = tables["events"]
+    keep = (events["role"] == "collision") & (events["contact"].fillna(0) > 0)
+    return events[keep.to_numpy(dtype=bool)]
+
+
+def _abs_quantile(values: pd.Series, q: float) -> float:
+    data = np.abs(values.to_numpy(dtype=float, na_value=np.nan))
+    return _quantile(data[np.isfinite(data)], q)
+
+
+def contact_summary(
+    tables: Mapping[str, pd.DataFrame],
+    tuned: Mapping[tuple[str, str], Tuned],
+    config: BenchmarkConfig,
+) -> pd.DataFrame:
+    """Isolation and classification per scenario and detector, over its scored events.
+
+    A *scored* event is an event of a collision run matched to a contact
+    (:mod:`.contacts`). Columns: scenario, method, oracle; ``n_events``
+    (events of the collision runs), ``n_scored``; ``n_link_ok``,
+    ``link_rate`` and its Wilson interval ``link_low``/``link_high``;
+    ``n_link_unseen``, scored events on a link beyond the last monitored
+    joint (the isolator weighs only joints with a band, so it cannot reach
+    that link);
+    ``point_error_median``/``_p95`` [m] (right link), ``line_distance_median``
+    [m]; ``force_error_median``/``_p95`` of ||F̂| − |F|| [N],
+    ``force_error_rel_median`` [-], ``force_error_filtered_median``/``_p95``
+    [N] (against the force through the observer's filter),
+    ``direction_error_median`` [deg]; ``n_above_quasi_static_min`` (|F̂| >
+    65 N); ``n_intended`` (scored events of intended contacts), ``n_correct``,
+    ``accuracy`` with ``accuracy_low``/``accuracy_high`` (Wilson).
+    """
+    events = tables["events"]
+    scored = _scored(tables)
+    rows = []
+    for (scenario, label), item in tuned.items():
+        here = events[
+            (events["scenario"] == scenario) & (events["method"] == label)
+            & (events["role"] == "collision")
+        ]  # fmt: skip
+        mine = scored[(scored["scenario"] == scenario) & (scored["method"] == label)]
+        n = len(mine)
+        links = int(mine["link_ok"].fillna(False).astype(bool).sum())
+        right = mine[mine["link_ok"].fillna(False).to_numpy(dtype=bool)]
+        correct = int(mine["kind_correct"].fillna(False).astype(bool).sum())
+        row: dict[str, Any] = {
+            "scenario": scenario, "method": label, "oracle": item.detection.oracle,
+            "n_events": len(here), "n_scored": n, "n_link_ok": links,
+        }  # fmt: skip
+        row["link_rate"], row["link_low"], row["link_high"] = _rate(links, n, config.confidence)
+        # A link beyond the last monitored joint moves joints without a band: unseen.
+        last = max(item.threshold.monitored_joints_)
+        row["n_link_unseen"] = int((mine["link_true"].fillna(0) > last).sum())
+        row["point_error_median"] = _abs_quantile(right["point_error"], 0.5)
+        row["point_error_p95"] = _abs_quantile(right["point_error"], 0.95)
+        row["line_distance_median"] = _abs_quantile(mine["line_distance"], 0.5)
+        row["force_error_median"] = _abs_quantile(mine["force_error"], 0.5)
+        row["force_error_p95"] = _abs_quantile(mine["force_error"], 0.95)
+        row["force_error_rel_median"] = _abs_quantile(mine["force_error_rel"], 0.5)
+        row["force_error_filtered_median"] = _abs_quantile(mine["force_error_filtered"], 0.5)
+        row["force_error_filtered_p95"] = _abs_quantile(mine["force_error_filtered"], 0.95)
+        row["direction_error_median"] = _abs_quantile(mine["direction_error"], 0.5)
+        row["n_above_quasi_static_min"] = int(
+            mine["above_quasi_static_min"].fillna(False).astype(bool).sum()
+        )
+        row["n_intended"] = int((mine["true_kind"] == "intended").sum())
+        row["n_correct"] = correct
+        row["accuracy"], row["accuracy_low"], row["accuracy_high"] = _rate(
+            correct, n, config.confidence
+        )
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def confusion_table(
+    tables: Mapping[str, pd.DataFrame], tuned: Mapping[tuple[str, str], Tuned]
+) -> pd.DataFrame:
+    """Classes of the scored events: one row per scenario, detector and true class.
+
+    Columns: scenario, method, ``true`` (``"intended"``, ``"collision"``) and
+    the counts of the class assigned, ``intended`` and ``collision``; every
+    row is there, zeros included, so a detector's counts add up to its
+    ``n_scored`` of :func:`contact_summary`.
+    """
+    scored = _scored(tables)
+    rows = []
+    for scenario, label in tuned:
+        mine = scored[(scored["scenario"] == scenario) & (scored["method"] == label)]
+        for true in KINDS:
+            assigned = mine.loc[mine["true_kind"] == true, "assigned_kind"]
+            rows.append(
+                {"scenario": scenario, "method": label, "true": true}
+                | {kind: int((assigned == kind).sum()) for kind in KINDS}
+            )
+    return pd.DataFrame(rows, columns=["scenario", "method", "true", *KINDS])

@@ -8,6 +8,10 @@ its scenario (the runs are shared by every detector); a test task simulates
 one run and judges it with every detector. Every task returns a
 :class:`TaskOutput`: its value and how long it took (the timing is reported
 apart from the results, which stay identical from run to run).
+A test task on a collision run also isolates and classifies every event
+(:mod:`.contacts`, with ``config.isolation``), and, for a scenario with
+``interactions``, simulates the simulator's random interactions instead of
+the scenario's own contacts.
 Units SI and radians; time along axis 0, arrays of shape ``(n_samples, n_dof)``.
 """
 
@@ -26,12 +30,15 @@ import numpy as np
 
 from ..evaluation import evaluate
 from ..io import Log, write_log
+from ..isolation import Isolator
 from ..monitor import CollisionMonitor, ObserverSettings, tune
 from ..robots.model import RobotModel
+from ..simulation.interactions import simulate_interactions
 from ..simulation.scenario import Scenario
 from ..thresholds import ConstantThreshold, Threshold, TimeVariantThreshold
 from ..thresholds.checks import check_joints
 from .config import BenchmarkConfig, BenchmarkScenario, Detection, RunSpec
+from .contacts import DetectorRun, score_events
 
 __all__ = ["RunRecords", "TaskOutput", "Tuned", "judge_run", "simulate_run", "tune_detector"]
 
@@ -98,8 +105,13 @@ def store_log(log: Log, log_dir: str, spec: RunSpec) -> None:
             filesystem.put_file(str(path), f"{folder}/{path.name}")
 
 
-def _simulate(scenario: Scenario, spec: RunSpec, log_dir: str | None) -> Log:
-    log = scenario.run(seed=spec.seed, collisions=spec.role == "collision").log
+def _simulate(
+    scenario: Scenario, spec: RunSpec, log_dir: str | None, interactions: int | None = None
+) -> Log:
+    if spec.role == "collision" and interactions is not None:
+        log = simulate_interactions(scenario, interactions, seed=spec.seed).log
+    else:
+        log = scenario.run(seed=spec.seed, collisions=spec.role == "collision").log
     if log_dir is not None:
         store_log(log, log_dir, spec)
     return log
@@ -165,12 +177,13 @@ def tune_detector(
 
 
 def _event_rows(
-    spec: RunSpec, label: str, evaluation: Any, max_delay: float
-) -> list[dict[str, Any]]:
+    spec: RunSpec, label: str, evaluation: Any, max_delay: float,
+    contacts: Sequence[dict[str, Any]] = (),
+) -> list[dict[str, Any]]:  # fmt: skip
     detections = {id(e) for e in evaluation.detections}
     false_alarms = {id(e) for e in evaluation.false_alarms}
     rows = []
-    for event in evaluation.events:
+    for index, event in enumerate(evaluation.events):
         # The windows this event detects, by the rule of sensorless.evaluation.
         hits = [
             w.id
@@ -189,18 +202,52 @@ def _event_rows(
                 "joints": ",".join(map(str, event.joints)), "peak": float(event.peak),
                 "peak_residual": float(event.peak_residual), "outcome": outcome,
                 "collisions": ",".join(map(str, hits)),
+                **(contacts[index] if contacts else {}),
             }
         )  # fmt: skip
     return rows
+
+
+def _result_row(
+    spec: RunSpec, detection: Detection, evaluation: Any, judged_seconds: float
+) -> dict[str, Any]:
+    return {
+        "scenario": spec.scenario, "role": spec.role, "run": spec.index,
+        "method": detection.label, "family": detection.method, "kind": detection.kind,
+        "oracle": detection.oracle, "judged_seconds": judged_seconds,
+        "n_collisions": evaluation.n_collisions, "n_detected": evaluation.n_detected,
+        "n_events": len(evaluation.events), "n_false_alarms": evaluation.n_false_alarms,
+        "n_excused": len(evaluation.excused),
+    }  # fmt: skip
+
+
+def _collision_rows(spec: RunSpec, detection: Detection, evaluation: Any) -> list[dict[str, Any]]:
+    return [
+        {
+            "scenario": spec.scenario, "role": spec.role, "run": spec.index,
+            "collision": int(row["id"]), "method": detection.label,
+            "oracle": detection.oracle, "start": float(row["start"]),
+            "end": float(row["end"]), "peak_force": float(row["peak_force"]),
+            "detected": bool(row["detected"]),
+            "start_delay": float(row["start_delay"]), "end_delay": float(row["end_delay"]),
+            "n_events": int(row["n_events"]),
+        }
+        for row in evaluation.per_collision.reset_index().to_dict("records")
+    ]  # fmt: skip
 
 
 def _judge(
     scenario: Scenario, config: BenchmarkConfig, spec: RunSpec, tuned: Sequence[Tuned],
     log_dir: str | None,
 ) -> RunRecords:  # fmt: skip
-    log = _simulate(scenario, spec, log_dir)
+    log = _simulate(scenario, spec, log_dir, config.scenarios[spec.scenario_index].interactions)
     models: dict[tuple[bool, str], RobotModel] = {}
-    results, collisions, events = [], [], []
+    isolators: dict[tuple[bool, str], Isolator] = {}
+    # Isolation and classification need the ground truth of the contacts: collision runs.
+    true_robot = scenario.robots()[0] if config.isolation and spec.role == "collision" else None
+    evaluations: list[tuple[str, Any]] = []
+    isolated: list[DetectorRun] = []
+    results, collisions = [], []
     run = {
         "scenario": spec.scenario, "role": spec.role, "run": spec.index, "seed": spec.seed,
         "duration": log.duration, "n_samples": log.n_samples,
@@ -220,29 +267,23 @@ def _judge(
             outcome.events, log, method=detection.label, max_delay=config.max_delay
         )
         judged = ~outcome.settling & np.isfinite(outcome.signals.residual).all(axis=1)
-        results.append(
-            {
-                "scenario": spec.scenario, "role": spec.role, "run": spec.index,
-                "method": detection.label, "family": detection.method, "kind": detection.kind,
-                "oracle": detection.oracle, "judged_seconds": float(judged.sum() * log.dt),
-                "n_collisions": evaluation.n_collisions, "n_detected": evaluation.n_detected,
-                "n_events": len(evaluation.events), "n_false_alarms": evaluation.n_false_alarms,
-                "n_excused": len(evaluation.excused),
-            }
-        )  # fmt: skip
-        for row in evaluation.per_collision.reset_index().to_dict("records"):
-            collisions.append(
-                {
-                    "scenario": spec.scenario, "role": spec.role, "run": spec.index,
-                    "collision": int(row["id"]), "method": detection.label,
-                    "oracle": detection.oracle, "start": float(row["start"]),
-                    "end": float(row["end"]), "peak_force": float(row["peak_force"]),
-                    "detected": bool(row["detected"]),
-                    "start_delay": float(row["start_delay"]), "end_delay": float(row["end_delay"]),
-                    "n_events": int(row["n_events"]),
-                }
-            )  # fmt: skip
-        events.extend(_event_rows(spec, detection.label, evaluation, config.max_delay))
+        results.append(_result_row(spec, detection, evaluation, float(judged.sum() * log.dt)))
+        collisions.extend(_collision_rows(spec, detection, evaluation))
+        evaluations.append((detection.label, evaluation))
+        if true_robot is not None:
+            if place not in isolators:
+                isolators[place] = Isolator(models[place])
+            bounds = monitor.detector.run(outcome.signals, skip_nonfinite=True)
+            isolated.append(
+                DetectorRun(evaluation.events, outcome.signals, bounds, isolators[place])
+            )
+    contacts = (
+        score_events(isolated, log, true_robot, config.max_delay) if true_robot is not None else []
+    )
+    events = []
+    for index, (label, evaluation) in enumerate(evaluations):
+        found = contacts[index] if contacts else ()
+        events.extend(_event_rows(spec, label, evaluation, config.max_delay, found))
     return RunRecords(run, results, collisions, events)
 
 

@@ -20,6 +20,11 @@ _SHOWN = [
     "false_alarms_per_hour", "false_alarms_high", "delay_median", "delay_p95", "delay_ratio",
     "eff",
 ]  # fmt: skip
+_CONTACTS = [
+    "scenario", "method", "n_scored", "link_rate", "link_low", "link_high",
+    "point_error_median", "force_error_median", "force_error_p95",
+    "force_error_filtered_median", "direction_error_median", "accuracy",
+]  # fmt: skip
 
 
 def benchmark_command(
@@ -71,13 +76,30 @@ def benchmark_command(
         str | None,
         typer.Option("--logs", help="Write every run's log here (folder or fsspec URL)."),
     ] = None,
+    interactions: Annotated[
+        int | None,
+        typer.Option(
+            "--interactions",
+            help="Collision runs carry this many random guiding/clamp/impact contacts instead "
+            "of the scenario's own (intended and collision classes).",
+        ),
+    ] = None,
+    isolation: Annotated[
+        bool,
+        typer.Option(
+            "--isolation/--no-isolation",
+            help="Isolate and classify every event of the collision runs.",
+        ),
+    ] = True,
 ) -> None:
     """Tune every method on N runs, judge it on M collision and K collision-free runs.
 
     Writes Parquet tables of every run, collision and event, a summary with
-    Wilson and Poisson intervals (Parquet + CSV), PNG figures and index.html.
+    Wilson and Poisson intervals (Parquet + CSV), the isolation and
+    classification of the collision runs' events (contacts and confusion
+    tables), PNG figures and index.html.
     """
-    overrides: dict[str, Any] = {"false_alarm_rate": false_alarm_rate}
+    overrides: dict[str, Any] = {"false_alarm_rate": false_alarm_rate, "isolation": isolation}
     for key, value in (("n_tuning", n_tuning), ("n_collision", n_collision), ("n_free", n_free)):
         if value is not None:
             overrides[key] = value
@@ -89,6 +111,9 @@ def benchmark_command(
     if duration is not None and not scenario:
         cut = tuple(dataclasses.replace(c, duration=duration) for c in config.scenarios)
         config = dataclasses.replace(config, scenarios=cut)
+    if interactions is not None:
+        drawn = tuple(dataclasses.replace(c, interactions=interactions) for c in config.scenarios)
+        config = dataclasses.replace(config, scenarios=drawn)
     output.mkdir(parents=True, exist_ok=True)
     columns = (
         TextColumn("{task.description}"),
@@ -110,6 +135,8 @@ def benchmark_command(
     seconds = time.perf_counter() - start
     written = result.write(output)
     print_table(result.summary()[_SHOWN].set_index(["scenario", "method"]))
+    if config.isolation:
+        print_table(result.contacts()[_CONTACTS].set_index(["scenario", "method"]))
     console.print(
         f"{len(result.timings)} tasks on {result.workers} process(es) in {seconds:.1f} s "
         f"(task time {result.timings['seconds'].sum():.1f} s); outputs: {written['index']}"

@@ -93,7 +93,7 @@ BLOCK_SIGNATURE = types.void(
 """Arguments of :func:`fused_block`."""
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _expit(x: float) -> float:
     """1 / (1 + exp(−x)) without overflow."""
     if x >= 0.0:
@@ -102,12 +102,12 @@ def _expit(x: float) -> float:
     return z / (1.0 + z)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _sign(x: float) -> float:
     return 1.0 if x > 0.0 else (-1.0 if x < 0.0 else 0.0)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def friction_torque(kind: int, const: FloatArray, j: int, v: float) -> float:
     """τ̂_fr(q̇) [N m] of joint j: ``kind`` and the parameters ``const[j, FRICTION_PARAMETERS:]``.
 
@@ -132,7 +132,7 @@ def friction_torque(kind: int, const: FloatArray, j: int, v: float) -> float:
     return -c0 * _sign(v)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _copy(source: Any, target: Any) -> None:
     """``target[...] = source`` for arrays of one shape, 1-D or 2-D, as plain loops.
 
@@ -145,14 +145,14 @@ def _copy(source: Any, target: Any) -> None:
         flat_target[i] = flat_source[i]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _close(source: FloatArray, min_duration: float, event: FloatArray) -> None:
     """Copy the open event of ``source`` to ``event`` if it lasted ``min_duration`` [s]."""
     if source[OPEN] != 0.0 and source[OPEN_END] - source[OPEN_START] >= min_duration:
         event[OPEN:N_FLAGS] = source[OPEN:N_FLAGS]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _bin(model: FloatArray, v: float) -> int:
     """Velocity bin of ``v`` [rad/s] (``searchsorted(edges, v, "right") − 1``, clipped)."""
     n_edges = int(model[N_EDGES])
@@ -203,7 +203,7 @@ def _restart(
             s[SECTIONS + row, j] = model[zi_at + row] * q[j]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _observe(
     q: FloatArray,
     qd: FloatArray,
@@ -266,7 +266,7 @@ def _observe(
     return True
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _bounds(
     const: FloatArray, table: FloatArray, model: FloatArray, s: Any, start: bool, out: Any
 ) -> bool:
@@ -305,7 +305,7 @@ def _bounds(
     return True
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _detect(
     time: float, const: FloatArray, model: FloatArray, out: Any, new: Any, event: Any
 ) -> int:

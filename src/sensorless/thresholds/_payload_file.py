@@ -23,7 +23,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from pydantic import ValidationError
 
-from .._version import __version__
 from ..exceptions import (
     DimensionError,
     FileFormatError,
@@ -46,7 +45,7 @@ from ..io.file_schema import (
 from ..robots import load as load_robot
 from ..robots.model import RobotModel
 from .file_schema import THRESHOLD_FORMAT_VERSION, ThresholdFile
-from .files import threshold_from_dict
+from .files import envelope, threshold_from_dict
 
 if TYPE_CHECKING:
     from .base import Threshold
@@ -68,17 +67,8 @@ def payload_to_dict(threshold: PayloadThreshold) -> dict[str, Any]:
         if declared.half_widths is None
         else {"half_widths": declared.half_widths.tolist()}
     )
-    fingerprint = {"fingerprint": threshold.fingerprint_} if threshold.fingerprint_ else {}
     return {
-        "format_version": THRESHOLD_FORMAT_VERSION,
-        "method": PAYLOAD_METHOD,
-        "library_version": __version__,
-        "robot": threshold.robot_,
-        "kind": threshold.kind_,
-        "n_dof": int(threshold.n_dof_),
-        "gain": threshold.gain_.tolist(),
-        "dt": float(threshold.dt_),
-        **fingerprint,
+        **envelope(threshold, PAYLOAD_METHOD),
         "params": {
             "max_mass": float(declared.max_mass),
             "center": declared.center.tolist(),

@@ -17,7 +17,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from pydantic import ValidationError
 
-from .._version import __version__
 from ..exceptions import DimensionError, FileFormatError, InputValueError
 from ..io.file_schema import (
     FileModel,
@@ -31,7 +30,7 @@ from ..io.file_schema import (
     shown,
 )
 from .file_schema import THRESHOLD_FORMAT_VERSION, ThresholdFile
-from .files import threshold_from_dict
+from .files import envelope, threshold_from_dict
 
 if TYPE_CHECKING:
     from .base import Threshold
@@ -45,17 +44,8 @@ PHASED_METHOD = "phased"
 
 def phased_to_dict(threshold: PhasedThreshold) -> dict[str, Any]:
     """A fitted phased threshold as plain values (what ``save`` writes)."""
-    fingerprint = {"fingerprint": threshold.fingerprint_} if threshold.fingerprint_ else {}
     return {
-        "format_version": THRESHOLD_FORMAT_VERSION,
-        "method": PHASED_METHOD,
-        "library_version": __version__,
-        "robot": threshold.robot_,
-        "kind": threshold.kind_,
-        "n_dof": int(threshold.n_dof_),
-        "gain": threshold.gain_.tolist(),
-        "dt": float(threshold.dt_),
-        **fingerprint,
+        **envelope(threshold, PHASED_METHOD),
         "params": {
             "level": threshold.level_.tolist(),
             "hysteresis": float(threshold.hysteresis),

@@ -64,6 +64,7 @@ __all__ = [
     "METHODS",
     "OLD_NAMES",
     "THRESHOLD_FORMAT_VERSION",
+    "envelope",
     "family_class",
     "family_name",
     "load_threshold",
@@ -163,12 +164,12 @@ def _to_builtin(value: Any) -> Any:
     return value
 
 
-def threshold_to_dict(threshold: Threshold) -> dict[str, Any]:
-    """A fitted threshold as plain Python values (what :func:`save_threshold` writes)."""
-    threshold._check_fitted()
+def envelope(threshold: Threshold, method: str) -> dict[str, Any]:
+    """The keys every threshold file starts with (:class:`ThresholdFile` without params and
+    attributes), for a fitted ``threshold`` written with ``method``."""
     return {
         "format_version": THRESHOLD_FORMAT_VERSION,
-        "method": family_name(threshold),
+        "method": method,
         "library_version": __version__,
         "robot": threshold.robot_,
         "kind": threshold.kind_,
@@ -176,6 +177,14 @@ def threshold_to_dict(threshold: Threshold) -> dict[str, Any]:
         "gain": threshold.gain_.tolist(),
         "dt": float(threshold.dt_),
         **_fingerprints(threshold),
+    }
+
+
+def threshold_to_dict(threshold: Threshold) -> dict[str, Any]:
+    """A fitted threshold as plain Python values (what :func:`save_threshold` writes)."""
+    threshold._check_fitted()
+    return {
+        **envelope(threshold, family_name(threshold)),
         "params": {k: _to_builtin(v) for k, v in threshold.get_params().items()},
         "attributes": {
             name: np.asarray(getattr(threshold, name)).tolist()

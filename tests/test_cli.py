@@ -237,3 +237,17 @@ def test_import_splits_a_real_recording_at_its_gap(tmp_path) -> None:
     assert first.groups == ["q", "qd", "tau_m"] and first.dt == pytest.approx(0.01)
     result = runner.invoke(app, ["import", "matlab", str(UR10 / "3times.csv")])
     assert result.exit_code == 2 and "unknown import format 'matlab'" in result.stderr
+
+
+def test_warm_up_runs_every_compiled_path_once() -> None:
+    """``make`` runs it after installing: each scenario's simulator and monitor on numba."""
+    from sensorless.robots.recursion import numba_available
+
+    result = runner.invoke(app, ["warm-up"])
+    assert result.exit_code == 0, result.output
+    lines = result.output.strip().splitlines()
+    if not numba_available():
+        assert "nothing to compile" in lines[0]
+        return
+    assert [line.split(":")[0] for line in lines] == ["puma560-thesis", "panda-gaz", "lwr4-thesis"]
+    assert all("simulator numba, monitor numba" in line for line in lines), lines

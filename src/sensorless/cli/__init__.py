@@ -28,6 +28,7 @@ from .run import (
     tune_command,
 )
 from .train import train_detector_command
+from .warmup import warm_up_command
 
 __all__ = ["app", "main"]
 
@@ -63,6 +64,7 @@ COMMANDS: dict[str, Callable[..., None]] = {
     "plan": plan_command,
     "report": report_command,
     "train-detector": train_detector_command,
+    "warm-up": warm_up_command,
 }
 for name, command in COMMANDS.items():
     app.command(name)(user_errors(command))

@@ -21,7 +21,6 @@ from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from pydantic import ValidationError
 
 from ..exceptions import (
     DimensionError,
@@ -34,18 +33,14 @@ from ..io.file_schema import (
     FileModel,
     NonNegative,
     PerJointNonNegative,
-    Problem,
     Vector3,
     absent,
-    check_format_version,
-    file_error,
-    problems_of,
-    shown,
 )
 from ..robots import load as load_robot
 from ..robots.model import RobotModel
-from .file_schema import THRESHOLD_FORMAT_VERSION, ThresholdFile
-from .files import envelope, threshold_from_dict
+from ._nested_file import read_nested
+from .file_schema import ThresholdFile
+from .files import envelope
 
 if TYPE_CHECKING:
     from .base import Threshold
@@ -132,55 +127,13 @@ def read_payload(
         ``robot`` is not the file's nominal model, or none was given and no
         built-in robot is.
     """
-    if not isinstance(data, Mapping):
-        raise file_error(source, [Problem((), f"expected a mapping; got {shown(data)}")])
-    check_format_version(data, THRESHOLD_FORMAT_VERSION, source, "threshold")
-    n_dof = data.get("n_dof")
-    context = {"n_dof": n_dof} if isinstance(n_dof, int) and n_dof >= 1 else None
-    problems: list[Problem] = []
-    envelope = params = part = None
-    try:
-        envelope = ThresholdFile.model_validate(dict(data), context=context)
-    except ValidationError as exc:
-        problems += problems_of(exc, ThresholdFile)
-    try:
-        params = _PayloadParams.model_validate(data.get("params"), context=context)
-    except ValidationError as exc:
-        problems += problems_of(exc, _PayloadParams, ("params",))
-    attributes = data.get("attributes")
-    if isinstance(attributes, Mapping):
-        problems += [
-            Problem(("attributes", key), "unknown key; expected threshold_")
-            for key in attributes
-            if key != "threshold_"
-        ]
-        if "threshold_" not in attributes:
-            problems.append(Problem(("attributes", "threshold_"), "required key is missing"))
-        else:
-            try:
-                part = threshold_from_dict(attributes["threshold_"], None, source=_PART)
-            except (FileFormatError, InputValueError) as exc:
-                problems.append(
-                    Problem(("attributes", "threshold_"), str(exc).removeprefix(_PART + ": "))
-                )
-    if problems or envelope is None or params is None or part is None:
-        raise file_error(source, problems)
-    if (part.robot_, part.kind_, part.n_dof_) != (envelope.robot, envelope.kind, n_dof):
-        raise file_error(
-            source,
-            [
-                Problem(
-                    ("attributes", "threshold_"),
-                    f"a threshold for robot {part.robot_!r}, {part.kind_!r} signals and "
-                    f"{part.n_dof_} joints; the file is for {envelope.robot!r}, "
-                    f"{envelope.kind!r} and {n_dof}",
-                )
-            ],
-        )
+    envelope, params, parts = read_nested(
+        data, source, _PayloadParams, ("threshold_",), (_PART, "a threshold")
+    )
     nominal = _nominal(envelope, robot, source)
     try:
         threshold = build(
-            part,
+            parts["threshold_"],
             nominal,
             params.max_mass,
             center=params.center,

@@ -15,7 +15,6 @@ from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from pydantic import ValidationError
 
 from ..exceptions import DimensionError, FileFormatError, InputValueError
 from ..io.file_schema import (
@@ -23,14 +22,9 @@ from ..io.file_schema import (
     Fraction,
     NonNegative,
     PerJointPositive,
-    Problem,
-    check_format_version,
-    file_error,
-    problems_of,
-    shown,
 )
-from .file_schema import THRESHOLD_FORMAT_VERSION, ThresholdFile
-from .files import envelope, threshold_from_dict
+from ._nested_file import read_nested
+from .files import envelope
 
 if TYPE_CHECKING:
     from .base import Threshold
@@ -79,52 +73,7 @@ def read_phased(data: Mapping[str, Any], source: str, build: Callable[..., Thres
 
     ``build`` is ``PhasedThreshold.from_fitted`` (this module does not import the class).
     """
-    if not isinstance(data, Mapping):
-        raise file_error(source, [Problem((), f"expected a mapping; got {shown(data)}")])
-    check_format_version(data, THRESHOLD_FORMAT_VERSION, source, "threshold")
-    n_dof = data.get("n_dof")
-    context = {"n_dof": n_dof} if isinstance(n_dof, int) and n_dof >= 1 else None
-    problems: list[Problem] = []
-    envelope = params = None
-    try:
-        envelope = ThresholdFile.model_validate(dict(data), context=context)
-    except ValidationError as exc:
-        problems += problems_of(exc, ThresholdFile)
-    try:
-        params = _PhasedParams.model_validate(data.get("params"), context=context)
-    except ValidationError as exc:
-        problems += problems_of(exc, _PhasedParams, ("params",))
-    attributes = data.get("attributes")
-    parts: dict[str, Threshold] = {}
-    if isinstance(attributes, Mapping):
-        problems += [
-            Problem(("attributes", key), f"unknown key; expected {', '.join(_PARTS)}")
-            for key in attributes
-            if key not in _PARTS
-        ]
-        for name in _PARTS:
-            if name not in attributes:
-                problems.append(Problem(("attributes", name), "required key is missing"))
-                continue
-            try:
-                parts[name] = threshold_from_dict(attributes[name], None, source=_PART)
-            except (FileFormatError, InputValueError) as exc:
-                problems.append(Problem(("attributes", name), str(exc).removeprefix(_PART + ": ")))
-    if problems or envelope is None or params is None or len(parts) < len(_PARTS):
-        raise file_error(source, problems)
-    for name, part in parts.items():
-        if (part.robot_, part.kind_, part.n_dof_) != (envelope.robot, envelope.kind, n_dof):
-            raise file_error(
-                source,
-                [
-                    Problem(
-                        ("attributes", name),
-                        f"a part for robot {part.robot_!r}, {part.kind_!r} signals and "
-                        f"{part.n_dof_} joints; the file is for {envelope.robot!r}, "
-                        f"{envelope.kind!r} and {n_dof}",
-                    )
-                ],
-            )
+    envelope, params, parts = read_nested(data, source, _PhasedParams, _PARTS, (_PART, "a part"))
     try:
         threshold = build(
             parts["accelerating_"],

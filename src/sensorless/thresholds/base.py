@@ -491,6 +491,8 @@ class Threshold(abc.ABC):
     def _process_checked(self, state: ThresholdState, inputs: ThresholdInputs) -> StreamBounds:
         """Bounds of checked inputs; joints that are not monitored get ``-inf``/``+inf``."""
         lower, upper, new_state = self._run(state, inputs)
+        if self.joints is None:  # every joint: nothing to mask (checked at fit)
+            return lower, upper, new_state
         joints = check_joints(self.joints, self.n_dof_)
         if len(joints) < self.n_dof_:
             monitored = np.zeros(self.n_dof_, dtype=bool)

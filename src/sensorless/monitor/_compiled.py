@@ -46,6 +46,7 @@ import numpy as np
 from numba import njit, types
 
 from .._validation import FloatArray
+from ..friction._static_kernel import sign, static_torque
 from ..observers._adaptive_kernel import compiled_rows as adapter_rows
 from ..robots._recursion_numba import terms_at
 
@@ -69,8 +70,7 @@ HAS_STREAM, START, T_LAST, FLOOR, PENDING, LATCHED, INSIDE_SINCE, HAS_DETECTOR =
 QUIET_FROM = 8  # the drift adapter may learn from this time on [s]
 OUTSIDE, OPEN, OPEN_START, OPEN_END, OPEN_JOINTS, OPEN_PEAK, OPEN_PEAK_RESIDUAL = range(9, 16)
 N_FLAGS = 16
-# friction kinds, threshold families
-NO_FRICTION, COULOMB, VISCOUS, COULOMB_VISCOUS, STRIBECK, SIGMOID, HYSTERETIC = range(7)
+# threshold families (friction kinds: sensorless.friction._kinds)
 CONSTANT, TIME_VARIANT, HYSTERETIC_FORM, VELOCITY_BINS = range(4)
 # codes: status (low 4 bits; faults from FAULT on), EVENT bit, joints mask from JOINTS_SHIFT on
 OK, COLLISION, SETTLING, FAULT_TIME, FAULT_Q, FAULT_TAU_M, FAULT_TAU_J = range(7)
@@ -91,45 +91,6 @@ BLOCK_SIGNATURE = types.void(
     types.Array(types.float64, 3, "C"), types.Array(types.int64, 1, "C"), _WRITE2,
 )  # fmt: skip
 """Arguments of :func:`fused_block`."""
-
-
-@njit(cache=True)
-def _expit(x: float) -> float:
-    """1 / (1 + exp(−x)) without overflow."""
-    if x >= 0.0:
-        return 1.0 / (1.0 + math.exp(-x))
-    z = math.exp(x)
-    return z / (1.0 + z)
-
-
-@njit(cache=True)
-def _sign(x: float) -> float:
-    return 1.0 if x > 0.0 else (-1.0 if x < 0.0 else 0.0)
-
-
-@njit(cache=True)
-def friction_torque(kind: int, const: FloatArray, j: int, v: float) -> float:
-    """τ̂_fr(q̇) [N m] of joint j: ``kind`` and the parameters ``const[j, FRICTION_PARAMETERS:]``.
-
-    The parameters are indexed, not sliced: a view per joint and sample cost
-    more than the arithmetic.
-    """
-    if kind == NO_FRICTION:
-        return 0.0
-    c0, c1 = const[j, FRICTION_PARAMETERS], const[j, FRICTION_PARAMETERS + 1]
-    c2 = const[j, FRICTION_PARAMETERS + 2]
-    if kind == COULOMB or kind == COULOMB_VISCOUS:
-        coulomb = c0 if v > 0.0 else (c1 if v < 0.0 else 0.0)
-        return coulomb + c2 * v if kind == COULOMB_VISCOUS else coulomb
-    if kind == VISCOUS:
-        return c0 * v
-    if kind == STRIBECK:
-        fv, delta = const[j, FRICTION_PARAMETERS + 3], const[j, FRICTION_PARAMETERS + 4]
-        level = c0 + (c1 - c0) * math.exp(-((abs(v) / c2) ** delta))
-        return _sign(v) * level + fv * v
-    if kind == SIGMOID:
-        return c0 * _expit(c1 * (v + c2)) - c0 * _expit(c1 * c2)
-    return -c0 * _sign(v)
 
 
 @njit(cache=True)
@@ -194,11 +155,11 @@ def _restart(
     for j in range(n):
         v = s[VELOCITY, j]
         vg = s[TERMS + 1, j] - s[TERMS + 2, j]
-        fr = friction_torque(kind, const, j, v)
+        fr = static_torque(kind, const, j, FRICTION_PARAMETERS, v)
         s[MOMENTUM, j], s[COR_GRAVITY, j], s[FRICTION_TORQUE, j] = s[TERMS, j], vg, fr
-        s[SIGN, j], s[TORQUE, j] = _sign(v), fr - vg
+        s[SIGN, j], s[TORQUE, j] = sign(v), fr - vg
         s[RESIDUAL, j], s[MODEL_TORQUE, j], s[FILTERED_FRICTION, j] = 0.0, -vg, fr
-        s[FILTERED_SIGN, j] = _sign(v)
+        s[FILTERED_SIGN, j] = sign(v)
         for row in range(2 * int(model[N_SECTIONS])):
             s[SECTIONS + row, j] = model[zi_at + row] * q[j]
 
@@ -241,8 +202,8 @@ def _observe(
     for j in range(n):
         v = s[VELOCITY, j]
         p1, vg1 = s[TERMS, j], s[TERMS + 1, j] - s[TERMS + 2, j]
-        fr1 = friction_torque(kind, const, j, v)
-        s1 = _sign(v)
+        fr1 = static_torque(kind, const, j, FRICTION_PARAMETERS, v)
+        s1 = sign(v)
         if fresh:
             s[MOMENTUM, j], s[COR_GRAVITY, j], s[FRICTION_TORQUE, j] = p1, vg1, fr1
             s[SIGN, j], s[TORQUE, j] = s1, fr1 - vg1

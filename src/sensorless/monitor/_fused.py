@@ -18,8 +18,7 @@ import numpy as np
 
 from .._validation import FloatArray
 from ..detection import TIME_TOLERANCE
-from ..friction import Coulomb, CoulombViscous, HystereticError, Sigmoid, Stribeck, Viscous
-from ..friction.static import FrictionModel
+from ..friction._kinds import STATIC_KINDS, static_parameters
 from ..observers._adaptive_kernel import temporaries_size
 from ..signals import Event
 from ..thresholds import ConstantThreshold, Threshold, TimeVariantThreshold, VelocityThreshold
@@ -30,14 +29,6 @@ if TYPE_CHECKING:
 
 __all__ = ["FusedStream", "unsupported"]
 
-_FRICTIONS: dict[type, tuple[int, tuple[str, ...]]] = {
-    Coulomb: (kernel.COULOMB, ("c_pos", "c_neg")),
-    Viscous: (kernel.VISCOUS, ("fv",)),
-    CoulombViscous: (kernel.COULOMB_VISCOUS, ("c_pos", "c_neg", "fv")),
-    Stribeck: (kernel.STRIBECK, ("fc", "fs", "vs", "fv", "delta")),
-    Sigmoid: (kernel.SIGMOID, ("phi1", "phi2", "phi3")),
-    HystereticError: (kernel.HYSTERETIC, ("c",)),
-}
 _FAMILIES = (ConstantThreshold, TimeVariantThreshold, VelocityThreshold)
 # Bound once: each attribute lookup on the module costs as much as a line of arithmetic.
 _fused_step, _fused_block = kernel.fused_step, kernel.fused_block
@@ -55,7 +46,7 @@ def unsupported(monitor: CollisionMonitor) -> str:
         return f"the {kind!r} observer runs on the Python path only"
     if type(threshold) not in _FAMILIES:
         return f"the {threshold.name!r} threshold family runs on the Python path only"
-    if friction is not None and type(friction) not in _FRICTIONS:
+    if friction is not None and type(friction) not in STATIC_KINDS:
         return f"the friction model {type(friction).__name__} runs on the Python path only"
     if n_dof > kernel.MAX_JOINTS:
         return (
@@ -84,7 +75,7 @@ class FusedStream:
         n, dt = observer.n_dof, observer.dt
         sos = monitor.estimator.sos_velocity
         zi_unit = monitor.estimator._zi_unit[1]  # the velocity cascade's sosfilt_zi
-        friction, parameters = _friction(observer.friction_model, n)
+        friction, parameters = static_parameters(observer.friction_model, n)
         family, const, table, edges, extra = _threshold(monitor.threshold, dt, n)
         limits = monitor.limits
         const[:, :28] = observer._kernel.kernel_constants
@@ -293,17 +284,6 @@ def _event(fields: list[float], method: str) -> Event:
 
 def _joints(mask: int) -> tuple[int, ...]:
     return tuple(j + 1 for j in range(mask.bit_length()) if mask >> j & 1)
-
-
-def _friction(model: FrictionModel | None, n: int) -> tuple[int, FloatArray]:
-    """Kind and parameters (n, 5) of the nominal friction, read by ``friction_torque``."""
-    parameters = np.zeros((n, 5))
-    if model is None:
-        return kernel.NO_FRICTION, parameters
-    kind, names = _FRICTIONS[type(model)]
-    for column, name in enumerate(names):
-        parameters[:, column] = np.broadcast_to(getattr(model, name), (n,))
-    return kind, parameters
 
 
 def _threshold(

@@ -27,6 +27,7 @@ import math
 from numba import njit
 
 from .._validation import FloatArray
+from ..friction._static_kernel import sign, static_torque
 
 __all__ = ["advance_bristles", "hold_bristles", "hold_drift", "recorded", "stage"]
 
@@ -34,39 +35,9 @@ _LUGRE = 7.0
 
 
 @njit(cache=True)
-def _sign(v: float) -> float:
-    return 1.0 if v > 0.0 else (-1.0 if v < 0.0 else 0.0)
-
-
-@njit(cache=True)
-def _expit(x: float) -> float:
-    if x >= 0.0:
-        return 1.0 / (1.0 + math.exp(-x))
-    e = math.exp(x)
-    return e / (1.0 + e)
-
-
-@njit(cache=True)
 def _static(fr: FloatArray, j: int, v: float) -> float:
     """Torque of a stateless model at velocity v [rad/s] on joint j."""
-    kind = fr[j, 0]
-    if kind == 1.0:
-        return fr[j, 2] if v > 0.0 else (fr[j, 3] if v < 0.0 else 0.0)
-    if kind == 2.0:
-        return fr[j, 2] * v
-    if kind == 3.0:
-        coulomb = fr[j, 2] if v > 0.0 else (fr[j, 3] if v < 0.0 else 0.0)
-        return coulomb + fr[j, 4] * v
-    if kind == 4.0:
-        fc, fs, vs, fv, delta = fr[j, 2], fr[j, 3], fr[j, 4], fr[j, 5], fr[j, 6]
-        level = fc + (fs - fc) * math.exp(-((abs(v) / vs) ** delta))
-        return _sign(v) * level + fv * v
-    if kind == 5.0:
-        phi1, phi2, phi3 = fr[j, 2], fr[j, 3], fr[j, 4]
-        return phi1 * _expit(phi2 * (v + phi3)) - phi1 * _expit(phi2 * phi3)
-    if kind == 6.0:
-        return -fr[j, 2] * _sign(v)
-    return 0.0
+    return static_torque(int(fr[j, 0]), fr, j, 2, v)
 
 
 @njit(cache=True)
@@ -138,5 +109,5 @@ def advance_bristles(fr: FloatArray, z: FloatArray, j: int, v: float, h: float) 
     sigma0 = fr[j, 2]
     level = _level(fr, j, v)
     rate_h = (sigma0 * h) * abs(v) / level
-    z_ss = _sign(v) * level / sigma0
+    z_ss = sign(v) * level / sigma0
     z[j] = z[j] * math.exp(-rate_h) - z_ss * math.expm1(-rate_h)

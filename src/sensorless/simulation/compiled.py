@@ -27,16 +27,8 @@ import numpy as np
 
 from .._validation import FloatArray
 from ..exceptions import InputValueError, ModelError, UnknownNameError
-from ..friction import (
-    Coulomb,
-    CoulombViscous,
-    DriftingFriction,
-    HystereticError,
-    LuGre,
-    Sigmoid,
-    Stribeck,
-    Viscous,
-)
+from ..friction import DriftingFriction, LuGre
+from ..friction._kinds import STATIC_KINDS
 from ..robots.recursion import MomentumTerms
 from .plants import FlexiblePlant, Friction, PlantState, RigidPlant
 
@@ -52,12 +44,7 @@ __all__ = ["BACKENDS", "CompiledPlant", "compile_plant", "numba_available", "pac
 BACKENDS = ("auto", "numba", "numpy")
 
 _STATIC: dict[type, tuple[float, tuple[str, ...]]] = {
-    Coulomb: (1.0, ("c_pos", "c_neg")),
-    Viscous: (2.0, ("fv",)),
-    CoulombViscous: (3.0, ("c_pos", "c_neg", "fv")),
-    Stribeck: (4.0, ("fc", "fs", "vs", "fv", "delta")),
-    Sigmoid: (5.0, ("phi1", "phi2", "phi3")),
-    HystereticError: (6.0, ("c",)),
+    **{model: (float(kind), names) for model, (kind, names) in STATIC_KINDS.items()},
     LuGre: (7.0, ("sigma0", "sigma1", "sigma2", "fc", "fs", "vs", "delta")),
 }
 

@@ -22,10 +22,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._validation import FloatArray
-from ..exceptions import ModelError
-from ..robots.recursion import MomentumTerms, frame_with_z, joint_axis
+from ..robots.recursion import frame_with_z, joint_axis
 from .collisions import ContactSet
-from .compiled import CompiledPlant
+from .compiled import CompiledPlant, model_constants
 from .controllers import ComputedTorque, JointPID, friction_torque
 from .plants import PlantState
 from .sensors import SensorModel
@@ -63,11 +62,7 @@ class LoopInputs:
 
 
 def _nominal_constants(controller: JointPID) -> FloatArray | None:
-    try:
-        terms = MomentumTerms(controller.model.pinocchio_model, backend="numpy")
-    except ModelError:
-        return None
-    return np.ascontiguousarray(terms.kernel_constants)
+    return model_constants(controller.model.pinocchio_model)
 
 
 def _pack_contacts(

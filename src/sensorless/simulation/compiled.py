@@ -38,7 +38,14 @@ try:
 except ImportError:  # numba is an optional extra
     _kernels = None
 
-__all__ = ["BACKENDS", "CompiledPlant", "compile_plant", "numba_available", "pack_friction"]
+__all__ = [
+    "BACKENDS",
+    "CompiledPlant",
+    "compile_plant",
+    "model_constants",
+    "numba_available",
+    "pack_friction",
+]
 
 #: Backend names accepted by :func:`~sensorless.simulation.simulator.simulate`.
 BACKENDS = ("auto", "numba", "numpy")
@@ -94,11 +101,12 @@ def pack_friction(friction: Friction, n_dof: int) -> FloatArray | None:
     for i, name in enumerate(names):
         packed[:, 2 + i] = np.broadcast_to(getattr(base, name), (n_dof,))
     if type(base) is LuGre:
-        packed[:, 22] = float(base._gaussian)
+        packed[:, 22] = float(np.all(np.asarray(base.delta) == 2.0))  # LuGre's Gaussian curve
     return packed
 
 
-def _constants(model: Any) -> FloatArray | None:
+def model_constants(model: Any) -> FloatArray | None:
+    """The recursion's per-joint constants of a Pinocchio model; None if it has other joints."""
     try:
         terms = MomentumTerms(model, backend="numpy")
     except ModelError:
@@ -186,10 +194,10 @@ def compile_plant(plant: RigidPlant | FlexiblePlant) -> CompiledPlant | None:
     if isinstance(plant, FlexiblePlant):
         if plant.integrator != "rosenbrock":
             return None
-        consts = _constants(plant._link_model)
+        consts = model_constants(plant._link_model)
         frictions = [pack_friction(plant.link_friction, n), pack_friction(plant.motor_friction, n)]
     else:
-        consts = _constants(plant.robot.pinocchio_model)
+        consts = model_constants(plant.robot.pinocchio_model)
         frictions = [pack_friction(plant.friction, n), pack_friction(None, n)]
     if consts is None or any(f is None for f in frictions):
         return None

@@ -25,8 +25,11 @@ at the flange as :func:`sensorless.robots.load` builds them), this script
    ``MomentumTerms.terms`` (numba) over the whole array and the fused batch
    ``CollisionMonitor.run`` (numba), and prints one table.
 
-Every figure is a loop over all samples divided by their number, median of
-``--repeat`` loops [µs per sample]; one thread. Without g++, the headers or the
+Every figure is a loop over all samples divided by their number [µs per
+sample], one thread: the median over ``--rounds`` rounds, each of which runs
+the C++ binary and then the Python loops, of the median of ``--repeat`` loops;
+the ratio of the fused step to ext_observer's is taken per round, then its
+median. Without g++, the headers or the
 libraries, it says what is missing and exits 0. The headers the wheels leave
 out are two header-only wheels: ``pip install cmeel-eigen cmeel-urdfdom-headers``.
 
@@ -35,7 +38,8 @@ checkout of it, or a git directory of it, with ``--ext-observer PATH`` (or the
 environment variable ``EXT_OBSERVER``); its ``lib/`` is exported to
 ``benchmarks/cpp/build/ext_observer`` once and used from there on.
 
-    .venv/bin/python benchmarks/bench_cpp.py [--samples 20000] [--repeat 7] [--ext-observer PATH]
+    .venv/bin/python benchmarks/bench_cpp.py [--samples 20000] [--repeat 3] [--rounds 5]
+        [--ext-observer PATH]
 """
 
 from __future__ import annotations
@@ -258,15 +262,14 @@ def run_cpp(urdf: Path, samples: Path, repeat: int) -> tuple[dict[str, float], d
     return times, checks
 
 
-def python_rows(
+def python_loops(
     robot: sl.robots.RobotModel,
     t: np.ndarray,
     q: np.ndarray,
     qd: np.ndarray,
     tau_free: np.ndarray,
-    repeat: int,
-) -> dict[str, float]:
-    """The project's per-sample costs [µs] on the same samples (numba rows need numba)."""
+) -> dict[str, Callable[[], object]]:
+    """The project's per-sample loops on the same samples, by row label (numba rows need numba)."""
     n = t.shape[0]
     model = robot.pinocchio_model
     data = model.createData()
@@ -277,9 +280,11 @@ def python_rows(
             pin.computeCoriolisMatrix(model, data, q[k], qd[k])
             pin.computeGeneralizedGravity(model, data, q[k])
 
-    rows = {"Python: the three Pinocchio calls, loop": median_us(pinocchio_loop, n, repeat)}
+    loops: dict[str, Callable[[], object]] = {
+        "Python: the three Pinocchio calls, loop": pinocchio_loop
+    }
     if not numba_available():
-        return rows
+        return loops
     terms = MomentumTerms(model, backend="numba")
     out = np.empty((3, robot.n_dof))
     samples = list(zip(q, qd, strict=True))
@@ -288,7 +293,7 @@ def python_rows(
         for qk, qdk in samples:
             terms.terms_one(qk, qdk, out)
 
-    rows["numba: MomentumTerms.terms_one, Python loop"] = median_us(terms_loop, n, repeat)
+    loops["numba: MomentumTerms.terms_one, Python loop"] = terms_loop
     free = Log(t[: n // 2], q[: n // 2], tau_m=tau_free[: n // 2])
     settings = ObserverSettings(gain=GAIN)
     threshold, settings = tune([free], robot, "time-variant", settings, margin=0.05, folds=None)
@@ -300,15 +305,11 @@ def python_rows(
         for tk, qk, tauk in stream:
             monitor.step(tk, qk, tauk)
 
-    rows[STEP] = median_us(step_loop, n, repeat)
-    rows["numba: MomentumTerms.terms, whole array"] = median_us(
-        lambda: terms.terms(q, qd), n, repeat
-    )
+    loops[STEP] = step_loop
+    loops["numba: MomentumTerms.terms, whole array"] = lambda: terms.terms(q, qd)
     log = Log(t, q, tau_m=tau_free)
-    rows["numba: CollisionMonitor.run (fused batch)"] = median_us(
-        lambda: monitor.run(log), n, repeat
-    )
-    return rows
+    loops["numba: CollisionMonitor.run (fused batch)"] = lambda: monitor.run(log)
+    return loops
 
 
 def residual_check(
@@ -335,8 +336,17 @@ def residual_check(
 
 
 # ---------------------------------------------------------------- one robot, the table
-def robot_column(name: str, n_samples: int, repeat: int) -> tuple[str, dict[str, float], bool]:
-    """Column label, {row label: µs per sample} and whether the residual check passed."""
+def robot_column(
+    name: str, n_samples: int, repeat: int, rounds: int
+) -> tuple[str, dict[str, float], list[float], bool]:
+    """Column label, {row label: µs per sample}, the per-round ratios of the fused stream step
+    to ext_observer's step, and whether the residual check passed.
+
+    Each of ``rounds`` rounds runs the C++ binary (median of ``repeat`` passes per variant)
+    and then every Python loop (median of ``repeat``); a row's figure is the median over the
+    rounds. Taking turns this way, a change of the machine's speed during the run (a shared
+    VM's varies by up to 2×) touches C++ and Python alike.
+    """
     robot = sl.robots.load(name)
     urdf_path, tip = ROBOTS[name]
     urdf = BUILD / f"{name}.urdf"
@@ -346,29 +356,59 @@ def robot_column(name: str, n_samples: int, repeat: int) -> tuple[str, dict[str,
     samples = BUILD / f"{name}_samples.csv"
     header = ",".join(f"{g}{j + 1}" for g in ("q", "qd", "tau") for j in range(robot.n_dof))
     np.savetxt(samples, np.hstack([q, qd, tau]), fmt="%.17g", delimiter=",", header=header)
-    times, checks = run_cpp(urdf, samples, repeat)
+    loops = python_loops(robot, t, q, qd, tau_free)
+    per_round: dict[str, list[float]] = {}
+    ratios = []
+    ok = True
+    for index in range(rounds):
+        times, checks = run_cpp(urdf, samples, repeat)
+        if index == 0:
+            ok = check_residuals(name, robot, checks, residual_check(robot, t, q, qd, tau))
+        for path in BUILD.glob("residual_*.csv"):
+            path.unlink()
+        row = {f"C++ {k}": v for k, v in times.items()}
+        row.update({label: median_us(loop, n_samples, repeat) for label, loop in loops.items()})
+        for label, cost in row.items():
+            per_round.setdefault(label, []).append(cost)
+        if EXT in row and STEP in row:
+            ratios.append(row[STEP] / row[EXT])
+    column = {label: statistics.median(costs) for label, costs in per_round.items()}
+    return f"{name} ({robot.n_dof} dof)", column, ratios, ok
+
+
+def check_residuals(
+    name: str, robot: sl.robots.RobotModel, checks: dict[str, str], errors: dict[str, float]
+) -> bool:
+    """Print the residual checks of one robot; whether the C++ observers match Python's."""
     if int(checks["n_dof"]) != robot.n_dof:
         raise SystemExit(f"{name}: the C++ model has {checks['n_dof']} joints, not {robot.n_dof}")
     relative = float(checks["recursion relative error"])
     print(f"\n{name}: (d) against the standard calls, relative error {relative:.1e}")
     ok = True
-    for label, error in residual_check(robot, t, q, qd, tau).items():
+    for label, error in errors.items():
         if label.startswith("ext_observer"):
             verdict = "(its own discretisation)"
         else:
             verdict = "ok" if error <= TOLERANCE else f"FAIL > {TOLERANCE:g}"
             ok &= error <= TOLERANCE
         print(f"  max |C++ {label}| residual difference: {error:.2e} N m {verdict}")
-    column = {f"C++ {k}": v for k, v in times.items()}
-    column.update(python_rows(robot, t, q, qd, tau_free, repeat))
-    return f"{name} ({robot.n_dof} dof)", column, ok
+    return ok
 
 
-def print_table(columns: dict[str, dict[str, float]], n_samples: int, repeat: int) -> None:
+def print_table(
+    columns: dict[str, dict[str, float]],
+    ratios: dict[str, list[float]],
+    n_samples: int,
+    repeat: int,
+    rounds: int,
+) -> None:
     """One row per path, one column pair (µs per sample, ratio to (b)) per robot."""
     names = list(columns)
     labels = list(dict.fromkeys(label for column in columns.values() for label in column))
-    print(f"\nµs per sample, median of {repeat} loops over {n_samples} samples")
+    print(
+        f"\nµs per sample over {n_samples} samples: median over {rounds} rounds of the median "
+        f"of {repeat} loops"
+    )
     print(f"× = ratio to {UPDATE!r}")
     print(f"{'path':62s}" + "".join(f"{n:>16s}{'×':>7s}" for n in names))
     for label in labels:
@@ -378,16 +418,20 @@ def print_table(columns: dict[str, dict[str, float]], n_samples: int, repeat: in
             row += f"{cost:16.3f}{cost / columns[n][UPDATE]:7.2f}"
         print(row)
     for n in names:
-        if EXT in columns[n] and STEP in columns[n]:
-            ratio = columns[n][STEP] / columns[n][EXT]
-            print(f"{n}: fused stream step / ext_observer step = {ratio:.2f}")
+        if ratios[n]:
+            each = " ".join(f"{r:.2f}" for r in ratios[n])
+            print(
+                f"{n}: fused stream step / ext_observer step = "
+                f"{statistics.median(ratios[n]):.2f} (median; per round {each})"
+            )
 
 
 # ---------------------------------------------------------------- main
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--samples", type=int, default=20_000, help="samples per robot")
-    parser.add_argument("--repeat", type=int, default=7, help="timed runs; the median is printed")
+    parser.add_argument("--repeat", type=int, default=3, help="timed loops per round (median)")
+    parser.add_argument("--rounds", type=int, default=5, help="rounds of C++ then Python (median)")
     parser.add_argument("--ext-observer", default=os.environ.get("EXT_OBSERVER"))
     args = parser.parse_args()
 
@@ -412,13 +456,15 @@ def main() -> None:
     print("binary up to date" if seconds is None else f"compiled in {seconds:.1f} s (wall)")
 
     print("load average (1, 5, 15 min) at the start: {:.2f} {:.2f} {:.2f}".format(*os.getloadavg()))
-    columns = {}
+    columns, ratios = {}, {}
     failed = False
     for name in ROBOTS:
-        label, column, ok = robot_column(name, args.samples, args.repeat)
+        label, column, ratios[label], ok = robot_column(
+            name, args.samples, args.repeat, args.rounds
+        )
         columns[label] = column
         failed |= not ok
-    print_table(columns, args.samples, args.repeat)
+    print_table(columns, ratios, args.samples, args.repeat, args.rounds)
     print("load average (1, 5, 15 min) at the end: {:.2f} {:.2f} {:.2f}".format(*os.getloadavg()))
     if failed:
         sys.exit(1)

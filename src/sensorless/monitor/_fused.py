@@ -32,6 +32,7 @@ __all__ = ["FusedStream", "unsupported"]
 _FAMILIES = (ConstantThreshold, TimeVariantThreshold, VelocityThreshold)
 # Bound once: each attribute lookup on the module costs as much as a line of arithmetic.
 _fused_step, _fused_block = kernel.fused_step, kernel.fused_block
+_fused_step_sample = kernel.fused_step_sample
 _FAULT, _EVENT = kernel.FAULT, kernel.EVENT
 _JOINTS_SHIFT, _REASONS, _STATUSES = kernel.JOINTS_SHIFT, kernel.REASONS, kernel.STATUSES
 _THRESHOLD_ROWS = [kernel.MODEL_TORQUE, kernel.FILTERED_FRICTION, kernel.FILTERED_SIGN,
@@ -58,7 +59,9 @@ def unsupported(monitor: CollisionMonitor) -> str:
 class FusedStream:
     """The two arrays of one monitor's compiled stream, and what reads them.
 
-    ``FAULT`` and ``SETTLING`` are status codes (``code & 15``) of the kernel.
+    ``FAULT``, ``SETTLING`` and ``UNJUDGED`` are status codes (``code & 15``)
+    of the kernel, ``EVENT`` its flag of an event closed at the sample, and
+    ``JOINTS_SHIFT`` where its mask of the joints outside their bounds starts.
 
     Parameters
     ----------
@@ -68,7 +71,8 @@ class FusedStream:
         window are read once.
     """
 
-    FAULT, SETTLING = kernel.FAULT, kernel.SETTLING
+    FAULT, SETTLING, EVENT, UNJUDGED = kernel.FAULT, kernel.SETTLING, kernel.EVENT, kernel.UNJUDGED
+    JOINTS_SHIFT = kernel.JOINTS_SHIFT
 
     def __init__(self, monitor: CollisionMonitor) -> None:
         observer, policy, detector = monitor._observer, monitor.policy, monitor.detector
@@ -109,15 +113,26 @@ class FusedStream:
         self._flags = self._buffers[:flags].reshape(3, kernel.N_FLAGS)
         self._state = self._buffers[flags : flags + rows].reshape(2, -1, n)
         self._masks = [_joints(mask) for mask in range(1 << n)] if n <= 10 else None
-        for function, signature in (
-            (_fused_step, kernel.SIGNATURE),
-            (_fused_block, kernel.BLOCK_SIGNATURE),
+        for function, signatures in (
+            (_fused_step, (kernel.SIGNATURE,)),
+            (_fused_block, (kernel.BLOCK_SIGNATURE,)),
+            (_fused_step_sample, kernel.SAMPLE_SIGNATURES),
         ):
-            if signature.args not in function.signatures:
-                # One compiled version each, loaded from numba's cache after the first run:
-                # without more, read-only inputs (rows of a Log) would compile a second one.
-                function.compile(signature)
-                function.disable_compile()
+            for signature in signatures:
+                if signature.args not in function.signatures:
+                    # These versions only, loaded from numba's cache after the first run:
+                    # without more, other inputs would compile other versions.
+                    function.compile(signature)
+            function.disable_compile()
+        self.sample = (_fused_step_sample, self._model, self._buffers)
+        """:func:`~sensorless.monitor._compiled.fused_step_sample` and this stream's two arrays.
+
+        Called as ``function(time, q, tau_m, tau_j, model, buffers, out)``
+        with whatever the user gave (``tau_j`` is ``tau_m`` for the
+        motor-torque observer); numba's dispatcher refuses (TypeError) what
+        its signatures do not take, and the function returns ``UNJUDGED`` for
+        the rest of what it does not judge.
+        """
         self.step = _entry_point(_fused_step, kernel.SIGNATURE)
         """:func:`~sensorless.monitor._compiled.fused_step` without numba's type dispatch.
 
@@ -164,11 +179,17 @@ class FusedStream:
         status = code & 15
         if status >= _FAULT:
             return _REASONS[status - _FAULT], (), None
-        event = (
-            _event(self._flags[2, kernel.OPEN_START :].tolist(), method) if code & _EVENT else None
-        )
+        event = self.closed(method) if code & _EVENT else None
+        return _STATUSES[status], self.joints(code), event
+
+    def joints(self, code: int) -> tuple[int, ...]:
+        """The joints (1-based) outside their bounds, from a return code of the kernel."""
         mask = code >> _JOINTS_SHIFT
-        return _STATUSES[status], _joints(mask) if self._masks is None else self._masks[mask], event
+        return _joints(mask) if self._masks is None else self._masks[mask]
+
+    def closed(self, method: str) -> Event:
+        """The event that closed at the last sample run (its code has ``EVENT``)."""
+        return _event(self._flags[2, kernel.OPEN_START :].tolist(), method)
 
     def block(
         self,

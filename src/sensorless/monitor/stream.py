@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validation import FloatArray, as_sample, check_dt
-from ..detection import TIME_TOLERANCE, Detector, DetectorState, Verdict
+from ..detection import TIME_TOLERANCE, Detector, DetectorState, Status, Verdict
 from ..exceptions import (
     DimensionError,
     InputTypeError,
@@ -53,9 +53,21 @@ except ImportError:  # numba is an optional extra
 
 __all__ = ["BACKENDS", "CollisionMonitor"]
 
+# Codes of the compiled stream's return value (see _compiled); unused without numba.
+_FAULT_CODE, _EVENT_CODE, _JOINTS_CODE, _UNJUDGED = (
+    (3, 16, 32, 15)
+    if _fused is None
+    else (
+        _fused.FusedStream.FAULT,
+        _fused.FusedStream.EVENT,
+        1 << _fused.FusedStream.JOINTS_SHIFT,  # the smallest code with a joint outside
+        _fused.FusedStream.UNJUDGED,
+    )
+)
+
 #: Stream backends of :class:`CollisionMonitor`.
 BACKENDS = ("auto", "numba", "python")
-_STATUSES = ("ok", "collision", "settling")
+_STATUSES: tuple[Status, ...] = ("ok", "collision", "settling")
 
 
 @dataclass
@@ -205,6 +217,9 @@ class CollisionMonitor:
         self._trust = (np.zeros(self._n_dof, dtype=bool), np.ones(self._n_dof, dtype=bool))
         self._record: list[tuple[float, ObserverSample, FloatArray]] | None = None
         self._fused = self._fused_stream(backend)
+        self._compiled: tuple[Any, FloatArray, FloatArray, FusedStream] | None = (
+            None if self._fused is None else (*self._fused.sample, self._fused)
+        )
         self.reset()
 
     def _fused_stream(self, backend: str) -> FusedStream | None:
@@ -314,6 +329,24 @@ class CollisionMonitor:
             a fault leaves every state exactly as it was (see
             :mod:`sensorless.monitor.policy`).
         """
+        compiled = self._compiled
+        if compiled is not None and qd is None:  # the compiled stream's common sample
+            function, model, buffers, fused = compiled
+            out = _empty((3, self._n_dof))
+            try:  # a Python float: numba's dispatcher types a NumPy scalar slowly
+                sensed = tau_j if self._joint else tau_m
+                code = function(float(t), q, tau_m, sensed, model, buffers, out)
+            except Exception:  # a type its signatures refuse: the checks below say why
+                code = _UNJUDGED
+            status = code & 15
+            if status < _FAULT_CODE:
+                joints = () if code < _JOINTS_CODE else fused.joints(code)
+                event = fused.closed(self._method) if code & _EVENT_CODE else None
+                return Verdict._of_rows(_STATUSES[status], float(t), joints, out, event)
+            if status != _UNJUDGED:
+                time, reason = float(t), fused.reason(status)
+                sample = cast("tuple[FloatArray, ...]", (q, _EMPTY, tau_m, sensed))
+                return self._fault(time, self._fused_fault(fused, reason, time, sample))
         try:
             time = float(t)
         except (TypeError, ValueError, OverflowError):

@@ -337,9 +337,13 @@ def test_backend_option(scenarios, monkeypatch) -> None:
         CollisionMonitor(nominal, model, model_settings, backend="numba")
     with pytest.raises(UnknownNameError, match="unknown backend 'fortran'"):
         CollisionMonitor(nominal, threshold, settings, backend="fortran")
-    # Without numba, "auto" is the Python path and "numba" says what is missing.
+    with pytest.raises(InputValueError, match="backend 'numpy' cannot run this monitor: the "):
+        CollisionMonitor(nominal, model, model_settings, backend="numpy")
+    # Without numba, "auto" is the numpy stream where it runs, else the Python path,
+    # and "numba" says what is missing.
     monkeypatch.setattr(stream_module, "_fused", None)
-    assert CollisionMonitor(nominal, threshold, settings).backend == "python"
+    assert CollisionMonitor(nominal, threshold, settings).backend == "numpy"
+    assert CollisionMonitor(nominal, model, model_settings).backend == "python"
     with pytest.raises(InputValueError, match=r"numba is not installed \(pip install sensorless"):
         CollisionMonitor(nominal, threshold, settings, backend="numba")
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import pandas as pd
@@ -95,8 +95,9 @@ def run_log(monitor: CollisionMonitor, log: Log, *, strict: bool) -> MonitorRun:
     t, q = np.asarray(log.t), np.asarray(log.q)
     # A measured velocity (real arms log it) replaces the estimate, as in ``observe``.
     measured = None if kind == "acceleration" or log.qd is None else np.asarray(log.qd)
-    if monitor._fused is not None:
-        return _run_fused(monitor, monitor._fused, log, measured, strict=strict)
+    fused = monitor._fused
+    if fused is not None and monitor.backend == "numba":  # numpy's stream: the arrays below
+        return _run_fused(monitor, cast("FusedStream", fused), log, measured, strict=strict)
     if monitor.adaptation is not None:
         return _run_stepwise(monitor, log, measured, strict=strict)
     n_samples, n_dof = q.shape

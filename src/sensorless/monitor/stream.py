@@ -37,6 +37,8 @@ from ..signals import Event, ObserverSignals
 from ..thresholds import ModelBasedThreshold, Threshold, ThresholdInputs
 from ..thresholds.checks import other_model, parameters_differ
 from ..thresholds.files import family_name
+from ._numpy_stream import NumpyStream
+from ._numpy_stream import unsupported as numpy_unsupported
 from .adaptation import Adaptation
 from .batch import BOUNDS_FAULT, OBSERVER_FAULT, MonitorRun, run_log, value_fault
 from .policy import StreamPolicy
@@ -66,7 +68,7 @@ _FAULT_CODE, _EVENT_CODE, _JOINTS_CODE, _UNJUDGED = (
 )
 
 #: Stream backends of :class:`CollisionMonitor`.
-BACKENDS = ("auto", "numba", "python")
+BACKENDS = ("auto", "numba", "numpy", "python")
 _STATUSES: tuple[Status, ...] = ("ok", "collision", "settling")
 
 
@@ -103,13 +105,18 @@ class CollisionMonitor:
         closer than ``hold`` are one event (defaults 5 ms and 50 ms).
     policy : StreamPolicy, optional
         Time base, limits, settling and latching (see :mod:`sensorless.monitor.policy`).
-    backend : {"auto", "numba", "python"}
+    backend : {"auto", "numba", "numpy", "python"}
         How :meth:`step` runs: ``"numba"`` one compiled function per sample
         (:mod:`sensorless.monitor._compiled`; ``pip install sensorless[fast]``),
         for momentum observers with the constant, time-variant, hysteretic or
-        velocity-based threshold; ``"python"`` the reference path of numpy
-        calls; ``"auto"`` numba where it can run. Both give the same verdicts,
-        and residuals and bounds within rounding.
+        velocity-based threshold; ``"numpy"`` the same families without numba,
+        a few vectorised numpy calls per sample
+        (:mod:`sensorless.monitor._numpy_stream`; no drift adaptation);
+        ``"python"`` the reference path, which composes the library's objects;
+        ``"auto"`` numba where it can run, else numpy where it can, else
+        python. All give the same verdicts, and residuals and bounds within
+        rounding. :meth:`process` runs the numba kernel over the log, or else
+        the Python path's whole-array form.
     adaptation : Adaptation, optional
         Adapt the nominal friction and offsets to drift (momentum observers;
         compiled with the families above): see :mod:`sensorless.monitor.adaptation`.
@@ -217,32 +224,39 @@ class CollisionMonitor:
         self._trust = (np.zeros(self._n_dof, dtype=bool), np.ones(self._n_dof, dtype=bool))
         self._record: list[tuple[float, ObserverSample, FloatArray]] | None = None
         self._fused = self._fused_stream(backend)
-        self._compiled: tuple[Any, FloatArray, FloatArray, FusedStream] | None = (
+        self._compiled: tuple[Any, Any, Any, FusedStream | NumpyStream] | None = (
             None if self._fused is None else (*self._fused.sample, self._fused)
         )
         self.reset()
 
-    def _fused_stream(self, backend: str) -> FusedStream | None:
-        """The compiled stream for ``backend``, or None for the Python path."""
+    def _fused_stream(self, backend: str) -> FusedStream | NumpyStream | None:
+        """The compiled or numpy stream for ``backend``, or None for the Python path."""
         if backend not in BACKENDS:
             raise UnknownNameError(f"unknown backend {backend!r}; options: {list(BACKENDS)}")
         if backend == "python":
             return None
+        if backend == "numpy":
+            why = numpy_unsupported(self)
+            if why:
+                raise InputValueError(f"backend 'numpy' cannot run this monitor: {why}")
+            return NumpyStream(self)
         why = "numba is not installed (pip install sensorless[fast])"
         if _fused is not None:
             why = _fused.unsupported(self)
         if why:
             if backend == "numba":
                 raise InputValueError(f"backend 'numba' cannot run this monitor: {why}")
-            return None
+            return None if numpy_unsupported(self) else NumpyStream(self)
         assert _fused is not None  # why is empty only with numba
         fused: FusedStream = _fused.FusedStream(self)
         return fused
 
     @property
     def backend(self) -> str:
-        """``"numba"`` or ``"python"``: how :meth:`step` runs."""
-        return "python" if self._fused is None else "numba"
+        """``"numba"``, ``"numpy"`` or ``"python"``: how :meth:`step` runs."""
+        if self._fused is None:
+            return "python"
+        return "numpy" if isinstance(self._fused, NumpyStream) else "numba"
 
     # ----------------------------------------------------------------- batch
     def run(self, log: Log) -> tuple[ObserverSignals, list[Event]]:
@@ -391,7 +405,7 @@ class CollisionMonitor:
         )
 
     def _step_fused(
-        self, fused: FusedStream, time: float, q: Any, qd: Any, tau_m: Any, tau_j: Any
+        self, fused: FusedStream | NumpyStream, time: float, q: Any, qd: Any, tau_m: Any, tau_j: Any
     ) -> Verdict:
         """:meth:`step` for a finite time, on the compiled path (which checks the floor)."""
         n = self._n_dof
@@ -423,7 +437,11 @@ class CollisionMonitor:
         return self._fault(time, self._fused_fault(fused, status, time, sample))
 
     def _fused_fault(
-        self, fused: FusedStream, reason: str, time: float, sample: tuple[FloatArray, ...]
+        self,
+        fused: FusedStream | NumpyStream,
+        reason: str,
+        time: float,
+        sample: tuple[FloatArray, ...],
     ) -> str:
         """The message of a fault the compiled step found: that of the Python path."""
         if reason == "time":

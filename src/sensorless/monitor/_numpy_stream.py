@@ -1,0 +1,506 @@
+"""The stream of :mod:`.stream` without numba: one sample in a few vectorised numpy calls.
+
+:class:`NumpyStream` has the interface of :class:`~sensorless.monitor._fused.FusedStream`
+and does, for one sample, what :func:`~sensorless.monitor._compiled.fused_step`
+specifies (time rules, value limits, velocity cascade, p, Cᵀq̇ and g, the
+momentum observer, settling, bounds, detector events, latch; commit only when
+the whole sample was good), with numpy over the joints instead of compiled
+loops. A small numpy call costs 0.2–0.6 µs, so the sample is laid out to need
+few of them:
+
+* all per-joint state lives in two row buffers (n_rows, n_dof), the committed
+  one and the scratch one; a sample reads the committed buffer, writes the
+  scratch one and commits by swapping the two (a fault swaps nothing);
+* the velocity cascade is one matrix product: its sections are linear in
+  (section states, q), so the new states and the filter output are
+  ``F @ [z, q]`` for a matrix F built once from the sections;
+* the value limits of q, τ_m, τ_J and of the velocity estimate are one check
+  on a block of rows;
+* p is ``pin.rnea`` of the model without gravity at zero velocity and
+  acceleration q̇ (= M q̇, armature included), Cᵀq̇ is q̇ · ``computeCoriolisMatrix``
+  and g ``computeGeneralizedGravity``;
+* the observer's update (increments of p, trapezoid of Cᵀq̇ − g and τ̂_fr,
+  held τ, the four first-order filters) is one matrix product over the rows
+  (this sample's terms, last sample's terms and filter states) when every
+  joint has the same gain;
+* the constant and time-variant bounds (forms "friction" and "hysteretic")
+  and the detector's excursions are one elementwise product and one matrix
+  product.
+
+The results equal the compiled stream's to rounding (the sums run in another
+order). Needs no numba. Units SI and radians.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pinocchio as pin
+
+from .._validation import FloatArray
+from ..detection import TIME_TOLERANCE
+from ..friction.static import Coulomb, CoulombViscous, HystereticError, Viscous
+from ..signals import Event
+from ..thresholds import ConstantThreshold, TimeVariantThreshold, VelocityThreshold
+from ._numpy_parts import (
+    BIN,
+    C1,
+    FA,
+    FB,
+    FC,
+    FR,
+    G1,
+    ONE,
+    P1,
+    S1,
+    SG,
+    SG0,
+    TJ,
+    TM,
+    VG,
+    Bounds,
+    EventRules,
+    F,
+    Flags,
+    H,
+    P,
+    R,
+    V,
+    block_views,
+    cascade,
+    friction_basis,
+    joints,
+    layout,
+    observer_matrix,
+)  # fmt: skip
+from ._numpy_parts import event as make_event
+
+if TYPE_CHECKING:
+    from .stream import CollisionMonitor
+
+__all__ = ["REASONS", "NumpyStream", "unsupported"]
+
+# Status codes, as those of the compiled kernel (``code & 15``; EVENT bit; joints mask).
+OK, COLLISION, SETTLING, FAULT_TIME, FAULT_Q, FAULT_TAU_M, FAULT_TAU_J = range(7)
+FAULT_EARLY, FAULT_GAP, FAULT_VELOCITY, FAULT_OBSERVER, FAULT_BOUNDS = range(7, 12)
+FAULT, EVENT, JOINTS_SHIFT, MAX_JOINTS, UNJUDGED = FAULT_TIME, 16, 5, 58, 15
+STATUSES = ("ok", "collision", "settling")
+REASONS = ("time", "q", "tau_m", "tau_j", "early", "gap", "qd", "observer", "bounds")
+_FAMILIES = (ConstantThreshold, TimeVariantThreshold, VelocityThreshold)
+_BASIS_FRICTION = (Coulomb, Viscous, CoulombViscous, HystereticError)
+
+
+def unsupported(monitor: CollisionMonitor) -> str:
+    """Why the numpy stream cannot run ``monitor`` ("" when it can)."""
+    kind, threshold, n_dof = monitor.settings.kind, monitor.threshold, monitor.robot.n_dof
+    if kind not in ("motor", "joint"):
+        return f"the {kind!r} observer runs on the Python path only"
+    if type(threshold) not in _FAMILIES:
+        return f"the {threshold.name!r} threshold family runs on the Python path only"
+    if monitor._adapter is not None:
+        return "drift adaptation runs on the Python and numba paths only"
+    if n_dof > MAX_JOINTS:
+        return f"the numpy stream handles at most {MAX_JOINTS} joints; the robot has {n_dof}"
+    return ""
+
+
+class NumpyStream:
+    """One monitor's stream in numpy: the interface of :class:`~._fused.FusedStream`.
+
+    ``FAULT`` and ``SETTLING`` are status codes (``code & 15``), as the compiled kernel's.
+
+    Parameters
+    ----------
+    monitor : CollisionMonitor
+        A monitor :func:`unsupported` accepts; its estimator, momentum
+        observer, fitted threshold, detector, limits, policy and settling
+        window are read once.
+    """
+
+    FAULT, SETTLING, EVENT, UNJUDGED, JOINTS_SHIFT = FAULT, SETTLING, EVENT, UNJUDGED, JOINTS_SHIFT
+
+    def __init__(self, monitor: CollisionMonitor) -> None:
+        observer, policy, detector = monitor._observer, monitor.policy, monitor.detector
+        n, dt = observer.n_dof, observer.dt
+        self._n = n
+        estimator = monitor.estimator
+        sos = np.asarray(estimator.sos_velocity, dtype=np.float64)
+        self._sections = [tuple(float(c) for c in section) for section in sos]
+        self._zi = np.asarray(estimator._zi_unit[1], dtype=np.float64).reshape(-1, 1)
+        self._backward = sos.tolist() == [[1.0, -1.0, 0.0, 1.0, 0.0, 0.0]]
+        self._scale = np.full(n, float(estimator._scale[1]))  # arrays divide faster than floats
+        self._joint = observer.torque == "joint"
+        self._tau = TJ if self._joint else TM  # the torque the observer integrates
+        limits = monitor.limits
+        check = 4 if self._joint else 3  # rows V … TM (… TJ)
+        self._centre = np.zeros((check, n))
+        self._centre[1] = limits.centre
+        self._limit = np.stack([limits.velocity, limits.half_range, *[limits.torque] * (check - 2)])
+        self._check = (check, check * n, np.empty((check, n)), np.empty((check, n), dtype=bool))
+        uniform = bool(np.all(observer.gain == observer.gain[0]))
+        pole, weight = observer._pole, observer._weight
+        self._observe = observer_matrix(
+            dt, float(weight[0]) if uniform else 1.0, float(pole[0]) if uniform else 0.0, self._tau
+        )
+        self._gains = None if uniform else (weight[None, :].copy(), pole[None, :].copy())
+        self._friction, self._friction_kind, self._basis = friction_basis(observer)
+        model = observer.robot.pinocchio_model
+        self._model, self._data = model, model.createData()
+        self._weightless = model.copy()
+        self._weightless.gravity = pin.Motion.Zero()
+        self._weightless_data = self._weightless.createData()
+        self._zero = np.zeros(n)
+        monitored = np.zeros(n, dtype=bool)
+        monitored[np.asarray(detector.monitored_joints) - 1] = True
+        self._monitored = np.flatnonzero(monitored).tolist()
+        self._bounds = Bounds(monitor.threshold, dt, monitored)
+        # Durations compared up to the Detector's tolerance on time differences.
+        self._early, self._gap = policy.early * dt, policy.gap * dt
+        self._settle = monitor.settle - TIME_TOLERANCE
+        self._release = math.nan if policy.release is None else policy.release - TIME_TOLERANCE
+        self._rules = EventRules(
+            self._monitored, detector.min_duration - TIME_TOLERANCE,
+            detector.hold - TIME_TOLERANCE, self._release,
+        )  # fmt: skip
+        self._masks = [joints(mask) for mask in range(1 << n)] if n <= 10 else None
+        m = 2 * sos.shape[0]  # section states, rows 0 … m − 1; the observer block after them
+        self._buffers = (np.zeros((m + BIN + 1, n)), np.zeros((m + BIN + 1, n)))
+        self._views = tuple(layout(buffer, m, check) for buffer in self._buffers)
+        self._start = np.zeros((BIN + 1, n))  # observer block of a (re)start or second sample
+        self._start_views = block_views(self._start)
+        self._shape = (n,)
+        self.sample = (self._sample_step, None, None)
+        """The entry point of the common sample, as the compiled stream's ``sample``:
+        ``function(time, q, tau_m, tau_j, model, buffers, out)`` (model and buffers
+        unused) returns the code of :meth:`_step`, or ``UNJUDGED`` for what it does not
+        judge (see :meth:`_sample_step`)."""
+        self.reset()
+
+    # ------------------------------------------------------------------ state
+    def reset(self) -> None:
+        """Forget the stream and the latch."""
+        for block in (*self._buffers, self._start):
+            block[:] = 0.0
+            block[-BIN - 1 + ONE] = 1.0
+        self._committed, self._scratch = self._views
+        self._velocity_row = self._scratch[1]
+        self._flags = Flags()
+        self._closed: tuple[float, ...] = ()
+
+    def _save(self) -> tuple[Any, ...]:
+        """A copy of the whole state (:meth:`block` runs a fresh stream, then restores it)."""
+        first = self._committed is self._views[0]
+        velocity = 0 if self._velocity_row is self._views[0][1] else 1
+        return [b.copy() for b in self._buffers], first, copy.copy(self._flags), velocity
+
+    def _restore(self, saved: tuple[Any, ...]) -> None:
+        buffers, first, flags, velocity = saved
+        for buffer, copied in zip(self._buffers, buffers, strict=True):
+            buffer[:] = copied
+        self._committed, self._scratch = self._views if first else self._views[::-1]
+        self._flags, self._velocity_row = flags, self._views[velocity][1]
+
+    # ------------------------------------------------------------------ sample
+    def _step(
+        self, time: float, q: FloatArray, qd: FloatArray, tau_m: FloatArray, tau_j: FloatArray,
+        out: FloatArray,
+    ) -> int:  # fmt: skip
+        """One sample; returns the kernel's code (status | ``EVENT`` | joints mask << 5)."""
+        fl = self._flags
+        if time <= fl.floor:
+            return FAULT_TIME
+        restart, time_fault = not fl.has_stream, 0
+        if not restart:
+            step = time - fl.t_last
+            if step < self._early:
+                time_fault = FAULT_EARLY
+            elif step > self._gap:
+                if self._early <= time - fl.pending <= self._gap:
+                    restart = True  # the stream resumed after a real gap
+                else:
+                    time_fault = FAULT_GAP
+        committed, scratch = self._committed, self._scratch
+        s_v, s_q, s_tau_m, s_tau_j, s_check, _, s_update, s_rows, s_filters, s_block = scratch[1:11]
+        if self._backward:  # backward differences: y = q − q_prev
+            _subtract(q, q if restart else committed[2], out=s_v)
+        else:
+            cascade(self._sections, self._zi * q if restart else committed[0], q, scratch[0], s_v)
+        _divide(s_v, self._scale, out=s_v)
+        if qd.shape[0]:
+            s_v[...] = qd  # the measured velocity replaces the estimate
+        self._velocity_row = s_v
+        s_q[...] = q
+        s_tau_m[...] = tau_m
+        if self._joint:
+            s_tau_j[...] = tau_j
+        _, size, difference, inside = self._check
+        _subtract(s_check, self._centre, out=difference)
+        _abs(difference, out=difference)
+        _less_equal(difference, self._limit, out=inside)
+        if time_fault or _count(inside) != size:
+            return self._refuse(time, time_fault)
+        fresh = not restart and fl.t_last == fl.start
+        views = self._start_views if restart or fresh else committed[11]
+        p, coriolis, gravity, sign = views[:4]  # _terms, inline: this runs once per sample
+        p[...] = _rnea(self._weightless, self._weightless_data, q, self._zero, s_v)
+        _dot(s_v, _coriolis(self._model, self._data, q, s_v), out=coriolis)
+        gravity[...] = _gravity(self._model, self._data, q)
+        _sign(s_v, out=sign)
+        if self._friction_kind != "none":
+            self._friction_rows(s_v, views)
+        if restart:
+            self._initial(q, qd if qd.shape[0] else self._zero, views[-1])
+        elif fresh:  # the observer starts at the first velocity estimate
+            self._start_rows(views[-1], views[-1])
+        _dot(self._observe, views[-2], out=s_update)
+        if self._gains is not None:  # per-joint gains: the filters y′ = w · input + a · y
+            weight, pole = self._gains
+            filtered = s_update[R - P :]
+            filtered *= weight
+            filtered += pole * views[-1][R : SG + 1]
+        settling = time - (time if restart else fl.start) < self._settle
+        bounds = self._bounds
+        if settling or bounds.velocity:  # else a non-finite filter shows in the excursions
+            if not math.isfinite(sum(s_filters.tolist())) and not _finite(s_filters).all():
+                fl.pending = time
+                return FAULT_OBSERVER
+        if settling:
+            out[0] = s_block[R]
+            out[1:] = math.nan
+        else:
+            start = restart or not fl.has_detector
+            excursions = bounds(s_block, s_rows, committed[10], start, out)
+            total = sum(excursions)  # NaN or +inf: a non-finite filter or bound
+            if not total < math.inf:
+                if not _finite(s_filters).all():
+                    fl.pending = time
+                    return FAULT_OBSERVER
+                if _isnan(out[1:]).any():
+                    fl.pending = time
+                    return FAULT_BOUNDS
+        # The sample was good from end to end: commit.
+        closed: tuple[float, ...] = ()
+        if restart:
+            if fl.has_stream and fl.has_detector:
+                closed = self._rules.lasted(fl)
+            fl.has_stream, fl.start, fl.has_detector = True, time, False
+        if settling:
+            code = SETTLING
+        else:
+            if not fl.has_detector:
+                fl.has_detector, fl.outside, fl.open = True, False, False
+            if fl.open or max(excursions) > 0.0 or (fl.latched and self._release == self._release):
+                code, closed = self._rules(fl, time, excursions, out, closed)
+            else:  # inside the bounds, nothing open, no release to watch
+                fl.outside = False
+                code = COLLISION if fl.latched else OK
+        fl.t_last = fl.floor = time
+        fl.pending = -math.inf
+        self._committed, self._scratch = scratch, committed
+        self._closed = closed
+        return code | EVENT if closed else code
+
+    def _sample_step(
+        self, time: float, q: Any, tau_m: Any, tau_j: Any, model: Any, buffers: Any, out: FloatArray
+    ) -> int:
+        """:meth:`_step` of a sample without a measured velocity, as the user gave it.
+
+        As ``fused_step_sample`` of the compiled stream: ``UNJUDGED``, with
+        nothing changed, unless ``time`` is finite and the samples are float64
+        arrays of shape (n_dof,), contiguous (``tau_j`` is ``tau_m`` for the
+        motor-torque observer); the caller's checks then say why.
+        """
+        shape = self._shape
+        if not (
+            type(q) is _ndarray and q.dtype is _FLOAT and q.shape == shape and q.strides == _STRIDES
+        ) or not math.isfinite(time):
+            return UNJUDGED
+        for x in (tau_m,) if tau_j is tau_m else (tau_m, tau_j):
+            if not (
+                type(x) is _ndarray and x.dtype is _FLOAT and x.shape == shape
+                and x.strides == _STRIDES
+            ):  # fmt: skip
+                return UNJUDGED
+        return self._step(time, q, _EMPTY, tau_m, tau_j, out)
+
+    def _refuse(self, time: float, time_fault: int) -> int:
+        """The fault of a sample outside the limits or the time rules, in the kernel's order."""
+        fl = self._flags
+        rows = [bool(row.all()) for row in self._check[3]]  # q̇, q, τ_m(, τ_J)
+        for row, code in zip(rows[1:], (FAULT_Q, FAULT_TAU_M, FAULT_TAU_J), strict=False):
+            if not row:
+                fl.pending = time
+                return code
+        if time_fault:
+            if time_fault == FAULT_GAP:
+                fl.pending = time
+            return time_fault
+        fl.pending = time
+        return FAULT_VELOCITY
+
+    def _terms(self, q: FloatArray, v: FloatArray, views: tuple[FloatArray, ...]) -> None:
+        """p, Cᵀq̇, g, sign and the friction rows at (q, ``v``) into the rows P1 … FC.
+
+        ``views`` are those of an observer block (:func:`_block_views`).
+        """
+        p, coriolis, gravity, sign = views[:4]
+        p[...] = _rnea(self._weightless, self._weightless_data, q, self._zero, v)
+        _dot(v, _coriolis(self._model, self._data, q, v), out=coriolis)
+        gravity[...] = _gravity(self._model, self._data, q)
+        _sign(v, out=sign)
+        self._friction_rows(v, views)
+
+    def _friction_rows(self, v: FloatArray, views: tuple[FloatArray, ...]) -> None:
+        """The rows FA … FC (their sum is τ̂_fr(``v``)) and the sign² and q̇ rows they use."""
+        sign, square, velocity, basis, friction, first = views[3:9]
+        if self._friction_kind == "basis":
+            _multiply(sign, sign, out=square)
+            velocity[...] = v
+            _multiply(basis, self._basis, out=friction)
+        elif self._friction_kind == "model":
+            first[...] = self._friction(v)
+
+    def _initial(self, q: FloatArray, v: FloatArray, block: FloatArray) -> None:
+        """The observer's state at a (re)start at (q, ``v``) into the rows P … SG of ``block``."""
+        terms = np.zeros_like(block)
+        self._terms(q, v, block_views(terms))
+        self._start_rows(terms, block)
+
+    def _start_rows(self, terms: FloatArray, block: FloatArray) -> None:
+        """``MomentumObserver.initial_state`` from the rows P1 … FC of ``terms``, into ``block``."""
+        p, vg, sign = terms[P1].copy(), terms[C1] - terms[G1], terms[S1].copy()
+        friction = terms[FA] + terms[FB] + terms[FC]
+        block[P], block[VG], block[FR], block[SG0] = p, vg, friction, sign
+        block[self._tau], block[R], block[H] = friction - vg, 0.0, -vg
+        block[F], block[SG] = friction, sign
+
+    # ------------------------------------------------------------------ interface
+    def run(
+        self,
+        time: float,
+        sample: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+        out: FloatArray,
+        method: str,
+    ) -> tuple[str, tuple[int, ...], Event | None]:
+        """One sample of the stream, as :meth:`~._fused.FusedStream.run`.
+
+        ``sample`` is (q, qd, tau_m, tau_j), ``qd`` empty without a measured
+        velocity; ``out`` (3, n_dof) receives the residual and the bounds [N m]
+        (NaN bounds while settling). Returns the status ("ok", "collision",
+        "settling") or, for a fault, what was refused (an entry of
+        :data:`REASONS`); the joints outside their bounds; the event that
+        closed at the sample (found by ``method``), if any.
+        """
+        code = self._step(time, *sample, out)
+        status = code & 15
+        if status >= FAULT:
+            return REASONS[status - FAULT], (), None
+        event = make_event(self._closed, method) if code & EVENT else None
+        mask = code >> JOINTS_SHIFT
+        return STATUSES[status], joints(mask) if self._masks is None else self._masks[mask], event
+
+    def joints(self, code: int) -> tuple[int, ...]:
+        """The joints (1-based) outside their bounds, from a return code of :meth:`_step`."""
+        mask = code >> JOINTS_SHIFT
+        return joints(mask) if self._masks is None else self._masks[mask]
+
+    def closed(self, method: str) -> Event:
+        """The event that closed at the last sample run (its code has ``EVENT``)."""
+        return make_event(self._closed, method)
+
+    def block(
+        self,
+        t: FloatArray,
+        sample: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+        method: str,
+    ) -> tuple[np.ndarray, FloatArray, list[Event]]:
+        """A whole log as a fresh stream, sample by sample, as :meth:`~._fused.FusedStream.block`.
+
+        ``t`` (n_samples,) [s]; ``sample`` is (q, qd, tau_m, tau_j), each
+        (n_samples, n_dof), ``qd`` (n_samples, 0) without a measured velocity.
+        Returns the codes per sample; the series (7, n_samples, n_dof): the
+        residual, lower and upper bounds [N m], the filtered model torque,
+        friction [N m] and sign, and the velocity [rad/s] (NaN at faults, but
+        the velocity of a "qd" fault); the events, the one still open at the
+        end included. The live stream's state is left alone.
+        """
+        q, qd, tau_m, tau_j = sample
+        n_samples, n = q.shape
+        saved = self._save()
+        self.reset()
+        try:
+            series = np.full((7, n_samples, n), np.nan)
+            codes = np.zeros(n_samples, dtype=np.int64)
+            events: list[Event] = []
+            out = np.empty((3, n))
+            for k in range(n_samples):
+                code = self._step(float(t[k]), q[k], qd[k], tau_m[k], tau_j[k], out)
+                codes[k] = code
+                if code == FAULT_VELOCITY:  # the estimate its message names
+                    series[6, k] = self._velocity_row
+                if code & 15 >= FAULT:
+                    continue
+                series[:3, k] = out
+                series[3:, k] = self.threshold_rows()
+                if code & EVENT:
+                    events.append(make_event(self._closed, method))
+            last = self.finish(method)
+        finally:
+            self._restore(saved)
+        return codes, series, events if last is None else [*events, last]
+
+    @staticmethod
+    def reason(status: int) -> str:
+        """What a fault status refused (an entry of :data:`REASONS`)."""
+        return REASONS[status - FAULT]
+
+    @property
+    def floor(self) -> float:
+        """No sample may come at or before this time [s]."""
+        return self._flags.floor
+
+    @property
+    def last(self) -> float:
+        """Time of the last accepted sample [s]."""
+        return self._flags.t_last
+
+    @property
+    def latched(self) -> bool:
+        """Whether a collision is latched."""
+        return self._flags.latched
+
+    @property
+    def velocity(self) -> FloatArray:
+        """The velocity estimate of the last sample run, accepted or not [rad/s]."""
+        return self._velocity_row.copy()
+
+    def threshold_rows(self) -> FloatArray:
+        """The observer's model torque, filtered friction and sign [N m, N m, -] and the
+        velocity [rad/s] of the last accepted sample, shape (4, n_dof) (a copy)."""
+        return self._committed[10][[H, F, SG, V]]
+
+    def refuse(self, time: float) -> None:
+        """Record a sample refused before :meth:`run` (the gap rule's pending time)."""
+        self._flags.pending = time
+
+    def finish(self, method: str) -> Event | None:
+        """Close the open event at the end of the stream, as ``Detector.finish``."""
+        fl = self._flags
+        if not (fl.has_stream and fl.has_detector):
+            return None
+        fields = self._rules.lasted(fl)
+        fl.open = fl.outside = False
+        return make_event(fields, method) if fields else None
+
+
+# Bound once: each module attribute lookup costs as much as a line of arithmetic.
+_subtract, _divide, _abs, _less_equal, _count = (
+    np.subtract, np.divide, np.abs, np.less_equal, np.count_nonzero,
+)  # fmt: skip
+_multiply, _dot, _sign = np.multiply, np.dot, np.sign
+_finite, _isnan = np.isfinite, np.isnan
+_ndarray, _FLOAT, _STRIDES, _EMPTY = np.ndarray, np.dtype(np.float64), (8,), np.empty(0)
+_rnea, _coriolis, _gravity = pin.rnea, pin.computeCoriolisMatrix, pin.computeGeneralizedGravity

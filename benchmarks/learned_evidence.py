@@ -21,14 +21,25 @@ hold), and are scored by :func:`sensorless.evaluation.evaluate`. Printed:
 contacts detected / total, false alarms per hour over all test runs with a
 Poisson 95 % interval (chi-square), and the median start delay.
 
-Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/learned_evidence.py`` (~5 min);
-``--case`` picks the section (each ~5-10 min):
+Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/learned_evidence.py`` (~1 min);
+``--weights`` takes another weights file than the shipped ``panda`` (e.g. a
+copy of older weights, to compare in the same conditions); ``--case`` picks
+the section (heldout, unseen, rate and cross each took under 2 min on one core):
 
 - ``heldout`` (default): the comparison above;
-- ``unseen``: a model error never seen in training, a payload of ``PAYLOAD``
-  on the true Panda's end link (training randomised the inertial and
-  friction errors, the noise and the speed, never a payload), fit and test
-  runs both carrying it (a user fits on the arm as it is);
+- ``unseen``: a payload on the true Panda's end link, ``--payload-mass`` kg
+  (default 2) at ``PAYLOAD_COM``, fit and test runs both carrying it (a user
+  fits on the arm as it is). Weights trained with payloads (the recipe's
+  ``payload_mass``, 0..3 kg on half the runs for the shipped Panda weights)
+  have seen such payloads in kind; the table's title says whether the mass
+  lies inside the training range. ``--payload-mass 4`` is outside it: the
+  truly unseen case. (Weights of format 1 were trained without payloads.);
+- ``rate``: the held-out comparison at ``--rate`` Hz (default 900), a rate
+  inside the weights' trained band of periods but not one a training run
+  had (the nearest is printed), and the refusal of a log outside the band
+  (``OUTSIDE_RATES``): the message :class:`LearnedThreshold` gives. Weights
+  trained at one period only refuse ``--rate`` itself: the table then has no
+  learned rows;
 - ``cross``: the ``puma560-thesis`` scenario judged with the Panda's weights.
   The network's convolutions and head are shared by all joints; what is per
   joint is the first layer's bias and the input and output normalisation
@@ -36,8 +47,9 @@ Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/learned_evidence.py`` 
   PUMA once each PUMA joint j takes the Panda joint j's bias (joint 7's is
   dropped), and the normalisation is either the Panda's own or re-estimated
   on the PUMA's fit runs (mean and spread of the four inputs and of r̂, as
-  training does); the puma560 weights and the time-variant threshold on the
-  same runs are the references;
+  training does); the puma560 weights (``--puma-weights``, default the
+  shipped ones) and the time-variant threshold on the same runs are the
+  references;
 - ``oracle``: why the time-variant threshold on the exact model raises more
   false alarms than on the nominal one: its band, where its alarms fall,
   and how far the test runs' residual exceeds the fit runs'.
@@ -61,9 +73,9 @@ import numpy as np
 from scipy.stats import chi2
 
 from sensorless.evaluation import evaluate
+from sensorless.exceptions import InputValueError
 from sensorless.io import Log
-from sensorless.learning import TrainingRecipe
-from sensorless.learning.training import _randomised
+from sensorless.learning import TrainingRecipe, run_draws
 from sensorless.monitor import CollisionMonitor, ObserverSettings, tune
 from sensorless.monitor.tuning import DEFAULT_MARGIN_FRACTION
 from sensorless.robots.model import RobotModel
@@ -82,23 +94,26 @@ from sensorless.thresholds._cnn import CHANNELS, Network
 SCENARIO, SECONDS = "panda-gaz", 30.0
 N_FIT, N_COLLISION, N_FREE = 2, 6, 4
 FIRST_SEED = 9001
-PAYLOAD = {"mass": 2.0, "com": [0.0, 0.0, 0.1]}
-"""2 kg, 10 cm out along the flange axis: two thirds of the Panda's rated 3 kg."""
+PAYLOAD_COM = [0.0, 0.0, 0.1]
+"""Centre of mass of the ``unseen`` case's payload: 10 cm out along the flange axis [m]."""
+OUTSIDE_RATES = (700.0, 1400.0)
+"""Rates [Hz] outside the shipped Panda weights' band (800 to 1250 Hz): refused."""
+
+
+def training_recipe(weights: str) -> TrainingRecipe:
+    """The recipe of the weights' training (fields of later recipes take their defaults)."""
+    recipe_info = load_weights(weights).recipe
+    fields = TrainingRecipe.__dataclass_fields__
+    return TrainingRecipe(**{k: v for k, v in recipe_info.items() if k in fields})
 
 
 def training_seeds(weights: str) -> set[int]:
-    """The scenario seeds of the weights' training runs (recomputed, nothing simulated)."""
-    recipe_info = load_weights(weights).recipe
-    fields = TrainingRecipe.__dataclass_fields__
-    recipe = TrainingRecipe(**{k: v for k, v in recipe_info.items() if k in fields})
-    scenario = load_scenario(recipe.scenario)
-    n_runs = max(1, int(np.ceil(recipe.minutes * 60.0 / recipe.run_seconds)))
-    seeds = set()
-    for child in np.random.SeedSequence(recipe.seed).spawn(n_runs):
-        rng = np.random.default_rng(child)
-        _randomised(scenario, recipe, rng)  # the same draws as training_runs, in order
-        seeds.add(int(rng.integers(2**31)))
-    return seeds
+    """The scenario seeds of the weights' training runs (recomputed, nothing simulated).
+
+    The scenario seed is drawn before the payload and the rate, so weights
+    trained before those were randomised recompute theirs the same way.
+    """
+    return {int(drawn["seed"]) for drawn in run_draws(training_recipe(weights))}
 
 
 def poisson_interval(count: int, hours: float) -> tuple[float, float]:
@@ -228,12 +243,12 @@ def transferred(
     robot = fit[0].robot.split(" (")[0]
     folder = Path(tempfile.mkdtemp())
     recipe = {"transferred_from": source, "renormalised": renormalise}
-    dt, gain = weights.dt, weights.gain
+    dt, gain, band = weights.dt, weights.gain, weights.period_range
     if rate_of_fit:
-        dt, gain = fit[0].dt, float(fit[0].gain[0])
+        dt, gain, band = fit[0].dt, float(fit[0].gain[0]), None
     return save_weights(
-        LearnedWeights(network, robot, weights.kind, gain, dt, recipe=recipe),
-        folder / f"{source}-to-{robot}",
+        LearnedWeights(network, robot, weights.kind, gain, dt, recipe=recipe, period_range=band),
+        folder / f"{Path(source).stem}-to-{robot}",
     )
 
 
@@ -402,47 +417,102 @@ def oracle_diagnosis(scenario: Scenario, fit_logs: list[Log], free: list[Log], f
             )
 
 
+def payload_scenario(scenario: Scenario, weights: str, mass: float) -> tuple[Scenario, str]:
+    """``scenario`` with a payload of ``mass`` kg on the true robot, and its title."""
+    spec = copy.deepcopy(scenario.spec)
+    spec["payload"] = {"mass": mass, "com": PAYLOAD_COM}
+    info = load_weights(weights).recipe
+    if "payload_mass" not in info or not info["payload_share"] > 0.0:
+        seen = "never seen in training (weights trained without payloads)"
+    else:
+        low, high = info["payload_mass"]
+        inside = "inside" if low <= mass <= high else "outside (never seen in training)"
+        seen = f"{inside} the training range {low:g}..{high:g} kg"
+    return Scenario(scenario.name, spec), f"{SCENARIO} with a payload {spec['payload']}, {seen}"
+
+
+def refusals(scenario: Scenario, weights: str, rates: tuple[float, ...]) -> list[str]:
+    """What fitting the learned threshold on a short collision-free run at each rate gives."""
+    settings = ObserverSettings(kind="motor")
+    nominal = scenario.nominal("motor")
+    found = []
+    for rate in rates:
+        log = scenario.with_sample_rate(rate).with_duration(2.0).run(seed=FIRST_SEED).log
+        try:
+            LearnedThreshold(weights).fit(settings.observe(log, nominal))
+            found.append(f"{rate:g} Hz: accepted")
+        except InputValueError as exc:
+            found.append(f"{rate:g} Hz: refused: {exc}")
+    return found
+
+
+def rate_title(weights: str, rate: float) -> str:
+    """Where ``rate`` lies against the weights' band and the nearest rate of a training run."""
+    loaded = load_weights(weights)
+    band = loaded.period_range
+    if band is None:
+        return f"{SCENARIO} at {rate:g} Hz; weights trained at {1.0 / loaded.dt:g} Hz only"
+    trained = [float(d["sample_rate"]) for d in loaded.recipe.get("drawn", [])]
+    nearest = min(trained, key=lambda r: abs(r - rate)) if trained else float("nan")
+    return (
+        f"{SCENARIO} at {rate:g} Hz; weights trained at {1.0 / band[1]:g}..{1.0 / band[0]:g} Hz "
+        f"(nearest training run: {nearest:.1f} Hz)"
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=(__doc__ or "").split("\n\n")[0])
     parser.add_argument(
-        "--case", choices=["heldout", "unseen", "cross", "oracle", "ur10"], default="heldout"
+        "--case",
+        choices=["heldout", "unseen", "rate", "cross", "oracle", "ur10"],
+        default="heldout",
     )
+    parser.add_argument("--weights", default="panda", help="Panda weights: name or file")
+    parser.add_argument("--puma-weights", default="puma560", help="cross: PUMA 560 weights")
+    parser.add_argument("--payload-mass", type=float, default=2.0, help="unseen: payload [kg]")
+    parser.add_argument("--rate", type=float, default=900.0, help="rate: sample rate [Hz]")
     args = parser.parse_args()
     started = time.perf_counter()
     if args.case == "ur10":
         ur10_case()
         print(f"total {time.perf_counter() - started:.0f} s")
         return
-    weights, name = "panda", SCENARIO
+    weights, name = args.weights, SCENARIO
     scenario = load_scenario(SCENARIO).with_duration(SECONDS)
+    learned: dict[str, Any] = {"learned": weights}
+    notes: list[str] = []
     if args.case == "unseen":
-        spec = copy.deepcopy(scenario.spec)
-        spec["payload"] = PAYLOAD
-        scenario = Scenario(scenario.name, spec)
-        name = f"{SCENARIO} with a payload {PAYLOAD} never seen in training"
+        scenario, name = payload_scenario(scenario, weights, args.payload_mass)
+    if args.case == "rate":
+        name = rate_title(weights, args.rate)
+        notes = refusals(scenario, weights, (args.rate, *OUTSIDE_RATES))
+        scenario = scenario.with_sample_rate(args.rate)
+        if not notes[0].endswith("accepted"):
+            learned = {}
     if args.case == "cross":
-        weights, name = "puma560", "puma560-thesis"
+        panda, weights, name = weights, args.puma_weights, "puma560-thesis"
         scenario = load_scenario(name).with_duration(SECONDS)
+        learned = {
+            "learned (puma560 weights)": weights,
+            "learned (panda weights, re-normalised on fit runs)": (
+                lambda fit: transferred(panda, fit, renormalise=True)
+            ),
+            "learned (panda weights, panda normalisation)": (
+                lambda fit: transferred(panda, fit, renormalise=False)
+            ),
+        }
     seeds, fit_logs, collision_logs, free_logs = simulate(scenario, weights)
     tests = collision_logs + free_logs
     simulated = time.perf_counter() - started
-    learned: dict[str, Any] = {"learned": None}
-    if args.case == "cross":
-        learned = {
-            "learned (puma560 weights)": "puma560",
-            "learned (panda weights, re-normalised on fit runs)": (
-                lambda fit: transferred("panda", fit, renormalise=True)
-            ),
-            "learned (panda weights, panda normalisation)": (
-                lambda fit: transferred("panda", fit, renormalise=False)
-            ),
-        }
     rows, fitted = compare(scenario, fit_logs, tests, learned)
     print(
         f"{name}, held-out seeds {seeds[0]}..{seeds[-1]} (none used in training): "
         f"fit on {N_FIT} collision-free runs, tested on {N_COLLISION} collision runs + "
         f"{N_FREE} collision-free runs of {SECONDS:g} s ({rows[0]['hours'] * 3600:.0f} s)"
     )
+    print(f"weights: {weights}")
+    for note in notes:
+        print(f"learned threshold fitted at {note}")
     print(f"margin (10 % of β) [N m]: {np.round(fitted['margin'], 3).tolist()}")
     for key, threshold in fitted.items():
         if isinstance(threshold, LearnedThreshold):

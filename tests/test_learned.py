@@ -16,12 +16,18 @@ from sensorless.exceptions import (
     ModelMismatchError,
     UnknownNameError,
 )
-from sensorless.learning import SCENARIOS, TrainingRecipe, train_detector
+from sensorless.learning import (
+    SCENARIOS,
+    TrainingRecipe,
+    run_draws,
+    train_detector,
+    training_runs,
+)
 from sensorless.learning._backward import forward_crops, gradients
-from sensorless.learning.training import random_network
+from sensorless.learning.training import _randomised, random_network
 from sensorless.observers import observe
 from sensorless.signals import ObserverSignals
-from sensorless.simulation.scenario import load_scenario
+from sensorless.simulation.scenario import Scenario, load_scenario
 from sensorless.thresholds import (
     LearnedThreshold,
     LearnedWeights,
@@ -201,7 +207,7 @@ def test_bad_inputs_are_clear_errors(weights_path, tmp_path):
     meta["format_version"] = 99
     newer = tmp_path / "newer.json"
     newer.write_text(json.dumps(meta))
-    with pytest.raises(FileFormatError, match=r"format_version must be 1\.\.1; got 99"):
+    with pytest.raises(FileFormatError, match=r"format_version must be 1\.\.2; got 99"):
         load_weights(newer)
 
 
@@ -235,3 +241,168 @@ def test_shipped_weights_detect_a_clear_impact(robot):
     assert windows
     hit = [w for w in windows if any(e.start <= w.end + 0.3 and e.end >= w.start for e in events)]
     assert len(hit) == len(windows)
+
+
+def _recomputed_draws(recipe: TrainingRecipe) -> list[dict]:
+    """The draws of every run, replayed from the recipe's SeedSequence in training's order."""
+    scenario = load_scenario(recipe.scenario)
+    n_runs = int(np.ceil(recipe.minutes * 60.0 / recipe.run_seconds))
+    draws = []
+    for child in np.random.SeedSequence(recipe.seed).spawn(n_runs):
+        rng = np.random.default_rng(child)
+        rng.uniform(size=2)  # inertial and friction bands of the model error
+        rng.integers(2**31)  # its seed
+        rng.uniform(size=2)  # noise and speed factors (a random point-to-point trajectory)
+        seed = int(rng.integers(2**31))
+        carries = rng.random() < recipe.payload_share
+        mass = rng.uniform(*recipe.payload_mass)
+        com = rng.uniform(recipe.payload_com_low, recipe.payload_com_high)
+        factor = rng.uniform(*recipe.rate_factor)
+        draws.append(
+            {
+                "seed": seed,
+                "factor": factor,
+                "rate": factor / scenario.dt,
+                "payload": {"mass": mass, "com": com.tolist()} if carries else None,
+            }
+        )
+    return draws
+
+
+def test_payload_and_rate_are_drawn_from_the_recipe_and_recorded(tmp_path):
+    recipe = TrainingRecipe(
+        minutes=8 / 60,
+        run_seconds=2.0,
+        steps=2,
+        batch=2,
+        crop=60,
+        seed=3,
+        rate_factor=(0.8, 1.25),
+        payload_share=0.5,
+    )
+    assert recipe.payload_mass == (0.0, 3.0)
+    expected = _recomputed_draws(recipe)
+    assert {d["payload"] is None for d in expected} == {True, False}  # both kinds of run
+    runs = training_runs(recipe)
+    path = save_weights(train_detector(recipe), tmp_path / "drawn")
+    weights = load_weights(path)
+    recorded = weights.recipe["drawn"]
+    assert len(recorded) == len(runs) == len(expected) == 4
+    dt = load_scenario(recipe.scenario).dt
+    for run, drawn, wanted in zip(runs, recorded, expected, strict=True):
+        assert drawn["seed"] == wanted["seed"] == run.drawn["seed"]
+        assert drawn["sample_rate"] == pytest.approx(wanted["rate"], rel=1e-12)
+        assert 0.8 <= wanted["factor"] <= 1.25
+        assert run.signals.dt == pytest.approx(1.0 / wanted["rate"], rel=1e-9)  # the run's rate
+        assert drawn["payload"] == wanted["payload"]
+        if wanted["payload"] is not None:
+            assert 0.0 <= wanted["payload"]["mass"] <= 3.0
+            com = np.array(wanted["payload"]["com"])
+            assert (np.array([-0.03, -0.03, 0.0]) <= com).all()
+            assert (com <= np.array([0.03, 0.03, 0.15])).all()
+    # the ranges are in the file; the band of periods spans the rate factors
+    for name in ("payload_share", "payload_mass", "payload_com_low", "payload_com_high"):
+        assert np.array_equal(weights.recipe[name], getattr(recipe, name))
+    assert tuple(weights.recipe["rate_factor"]) == (0.8, 1.25)
+    assert weights.period_range == pytest.approx((dt / 1.25, dt / 0.8), rel=1e-9)
+    assert weights.dt == dt
+    assert run_draws(recipe) == recorded  # the draws recomputed without simulating
+
+
+def test_training_puts_the_payload_on_the_true_robot_only():
+    recipe = TrainingRecipe(minutes=2 / 60, run_seconds=2.0, payload_share=1.0, seed=2)
+    (drawn,) = _recomputed_draws(recipe)
+    scenario = load_scenario(recipe.scenario)
+    rng = np.random.default_rng(np.random.SeedSequence(recipe.seed).spawn(1)[0])
+    randomised, _ = _randomised(scenario, recipe, rng)
+    assert randomised.spec["payload"] == drawn["payload"]
+    true, nominal = randomised.robots()
+    grown = true.parameter_vector() - scenario.robots()[0].parameter_vector()
+    # the end link's standard parameters (last 11: inertia, m c, m, Ia) grew by the
+    # payload's m c and m; no other link's did
+    mass, com = drawn["payload"]["mass"], np.array(drawn["payload"]["com"])
+    np.testing.assert_allclose(grown[-5:-2], mass * com, rtol=1e-9, atol=1e-12)
+    assert grown[-2] == pytest.approx(mass, rel=1e-12)
+    assert grown[-1] == 0.0 and np.count_nonzero(grown[:-11]) == 0
+    # the model the user has is the same without the payload
+    spec = {k: v for k, v in randomised.spec.items() if k != "payload"}
+    without = Scenario(randomised.name, spec).robots()[1]
+    np.testing.assert_array_equal(nominal.parameter_vector(), without.parameter_vector())
+
+
+def _banded(tmp_path, low: float = 0.8e-3, high: float = 1.25e-3):
+    weights = LearnedWeights(
+        _network(), robot="demo", kind="motor", gain=20.0, dt=1e-3, period_range=(low, high)
+    )
+    return save_weights(weights, tmp_path / "banded")
+
+
+def _at_period(dt: float) -> ObserverSignals:
+    """``_run(0)`` with its samples ``dt`` [s] apart."""
+    run = _run(0)
+    t = np.arange(run.n_samples) * dt
+    return ObserverSignals(t, *(getattr(run, f) for f in _FIELDS), gain=20.0, robot="demo")
+
+
+def test_a_period_inside_the_trained_band_is_accepted_one_outside_refused(tmp_path):
+    path = _banded(tmp_path)
+    assert load_weights(path).period_range == (0.8e-3, 1.25e-3)
+    for dt in (0.8e-3, 0.9e-3, 1.1e-3, 1.25e-3):  # inside, edges included, none exactly 1 ms
+        run = _at_period(dt)
+        threshold = LearnedThreshold(path, transient=0.05).fit(run)
+        kept = run.t >= 0.05
+        np.testing.assert_allclose(threshold.level_, _score(path, run)[kept].max(axis=0), rtol=1e-9)
+    for dt, hz in ((0.7e-3, "1428.57"), (1.3e-3, "769.231")):
+        message = (
+            r"sample periods of 0\.0008 to 0\.00125 s \(800 to 1250 Hz; the network counts "
+            rf"samples\); got {dt} s \({hz} Hz\), outside that band"
+        )
+        with pytest.raises(InputValueError, match=message):
+            LearnedThreshold(path).fit(_at_period(dt))
+        with pytest.raises(InputValueError, match=message):  # a stream at that period too
+            threshold.initial_state(*(np.zeros(N_DOF) for _ in range(4)), dt=dt)
+
+
+def test_a_format_1_file_still_loads_and_keeps_its_exact_period(weights_path, tmp_path):
+    meta = json.loads(weights_path.read_text())
+    assert meta["format_version"] == 2 and meta["period_range"] is None
+    meta["format_version"] = 1  # as version 1 wrote it: no period_range key
+    del meta["period_range"]
+    old = tmp_path / "old.json"
+    old.write_text(json.dumps(meta))
+    (tmp_path / "old.npz").write_bytes(weights_path.with_suffix(".npz").read_bytes())
+    meta["arrays"] = "old.npz"
+    old.write_text(json.dumps(meta))
+    loaded, saved = load_weights(old), load_weights(weights_path)
+    assert loaded.period_range is None and loaded.dt == 1e-3
+    for a, b in zip(loaded.network.parameters(), saved.network.parameters(), strict=True):
+        np.testing.assert_array_equal(a, b)
+    LearnedThreshold(old).fit(_at_period(1.005e-3))  # within 1 % of the period
+    with pytest.raises(InputValueError, match=r"sample period of 0\.001 s .* more than 1% apart"):
+        LearnedThreshold(old).fit(_at_period(0.9e-3))
+
+
+def test_bad_training_ranges_and_bands_are_clear_errors(tmp_path):
+    bad = [
+        ({"payload_share": 1.5}, r"payload_share must be in \[0, 1\]"),
+        (
+            {"payload_mass": (2.0, 1.0)},
+            r"payload_mass must be a range \(low, high\) with low <= high",
+        ),
+        ({"payload_mass": (-1.0, 1.0)}, r"payload_mass must be a finite number >= 0"),
+        ({"rate_factor": (0.0, 1.2)}, r"rate_factor must be a finite number > 0"),
+        ({"rate_factor": (1.2,)}, r"rate_factor must be a range \(low, high\) \[-\]"),
+        ({"payload_com_low": (0.0, 0.0)}, r"must be 3 coordinates \[m\]"),
+        (
+            {"payload_com_low": (0.0, 0.0, 0.2)},
+            r"payload_com_low \.\. payload_com_high must be a range",
+        ),
+    ]
+    for change, message in bad:
+        with pytest.raises(InputValueError, match=message):
+            run_draws(TrainingRecipe(minutes=1 / 60, run_seconds=1.0, **change))
+    path = _banded(tmp_path, 2e-3, 1e-3)
+    with pytest.raises(
+        FileFormatError, match=r"period_range must be \[low, high\] \[s\] with 0 < low <= high"
+    ):
+        load_weights(path)

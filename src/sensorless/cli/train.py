@@ -25,10 +25,37 @@ def train_detector_command(
         str | None, typer.Option("--scenario", help="Scenario name or file (default: the robot's).")
     ] = None,
     steps: Annotated[int, typer.Option("--steps", help="Adam steps.")] = 1500,
+    payload_max: Annotated[
+        float,
+        typer.Option(
+            "--payload-max",
+            help="Largest payload mass in kg on the true robot (half the runs carry one, "
+            "U(0, this)); 0: none, as the shipped weights (a payload the network cannot "
+            "see widens its band on an arm that carries none).",
+        ),
+    ] = 0.0,
+    rate_factor: Annotated[
+        tuple[float, float],
+        typer.Option(
+            "--rate-factor",
+            help="Range of the factor on the scenario's sample rate; the weights accept "
+            "periods in the band it spans. 1 1: the scenario's period only.",
+        ),
+    ] = (0.8, 1.25),
 ) -> None:
-    """Simulate randomised labelled runs, train the network, write the weights file."""
+    """Simulate randomised labelled runs, train the network, write the weights file.
+
+    Each run draws its model error, noise, speed, payload (on the true robot)
+    and sample rate; the weights file records the ranges and the draws.
+    """
     recipe = TrainingRecipe(
-        scenario=scenario or scenario_for(robot), minutes=minutes, seed=seed, steps=steps
+        scenario=scenario or scenario_for(robot),
+        minutes=minutes,
+        seed=seed,
+        steps=steps,
+        payload_mass=(0.0, payload_max),
+        payload_share=0.5 if payload_max > 0 else 0.0,
+        rate_factor=rate_factor,
     )
     weights = run_with_spinner("training", lambda: train_detector(recipe))
     path = save_weights(weights, output)

@@ -3,12 +3,16 @@
 The JSON file is what a person reads: the format name and version, the
 library version, the robot the network was trained for (name, joints,
 fingerprint of the nominal model), the signals it reads (kind, observer gain
-K_I [1/s], sample period [s]), the architecture, the input and output
-normalisation, the training recipe with its seeds, and the SHA-256 of the
-``.npz`` file, which holds only the trained arrays (``kernel_<k>``,
+K_I [1/s], sample period [s] and, from format version 2, the band of periods
+it was trained on, ``period_range`` [s], or null), the architecture, the
+input and output normalisation, the training recipe with its seeds, and the
+SHA-256 of the ``.npz`` file, which holds only the trained arrays (``kernel_<k>``,
 ``bias_<k>``, ``head``, ``head_bias``). Both are written and read without
 pickle. Weights shipped with the package live in ``sensorless/data/learned``
 and are named by their robot (:func:`builtin_weights`).
+
+Versions: 1 has no ``period_range`` (the network was trained at ``dt`` only);
+2 adds it. Both are read; version 2 is written.
 """
 
 from __future__ import annotations
@@ -38,8 +42,8 @@ __all__ = [
 ]
 
 WEIGHTS_FORMAT = "sensorless-learned-weights"
-WEIGHTS_FORMAT_VERSION = 1
-"""Version of the weights format this library reads and writes."""
+WEIGHTS_FORMAT_VERSION = 2
+"""Version of the weights format this library writes (it reads 1 and 2)."""
 _NORMALISATION = ("input_mean", "input_scale", "output_mean", "output_scale")
 
 
@@ -58,13 +62,16 @@ class LearnedWeights:
     gain : float
         Observer gain K_I of the training runs [1/s].
     dt : float
-        Sample period of the training runs [s]; the dilations count samples.
+        Sample period of the training scenario [s]; the dilations count samples.
     fingerprint : str
         Fingerprint of the nominal model of the training runs (empty: unknown).
     recipe : dict
         How it was trained: scenario, minutes, seeds, randomisation, optimiser.
     library_version : str
         Version of sensorless that trained it.
+    period_range : (float, float) or None
+        Shortest and longest sample period of the training runs' band [s]
+        (the recipe's ``rate_factor``); None: trained at ``dt`` only.
     """
 
     network: Network
@@ -75,6 +82,7 @@ class LearnedWeights:
     fingerprint: str = ""
     recipe: dict[str, Any] = field(default_factory=dict)
     library_version: str = __version__
+    period_range: tuple[float, float] | None = None
 
     @property
     def n_dof(self) -> int:
@@ -127,6 +135,7 @@ def save_weights(weights: LearnedWeights, path: str | Path) -> Path:
         "kind": weights.kind,
         "gain": weights.gain,
         "dt": weights.dt,
+        "period_range": None if weights.period_range is None else list(weights.period_range),
         "architecture": {
             "inputs": list(CHANNELS),
             "channels": int(net.kernels[-1].shape[0]),
@@ -231,6 +240,8 @@ def _from_meta(meta: dict[str, Any], source: Path) -> LearnedWeights:
         float(arch["floor"]),
     )
     _check_shapes(network, int(meta["n_dof"]), source)
+    band = meta.get("period_range") if meta["format_version"] >= 2 else None
+    period_range = None if band is None else _period_range(band, source)
     return LearnedWeights(
         network,
         str(meta["robot"]),
@@ -240,7 +251,17 @@ def _from_meta(meta: dict[str, Any], source: Path) -> LearnedWeights:
         str(meta.get("fingerprint", "")),
         dict(meta.get("training", {})),
         str(meta.get("library_version", "")),
+        period_range,
     )
+
+
+def _period_range(band: Any, source: Path) -> tuple[float, float]:
+    low, high = (float(v) for v in band)
+    if not 0.0 < low <= high < np.inf:
+        raise _problem(
+            source, f"period_range must be [low, high] [s] with 0 < low <= high; got {band}"
+        )
+    return low, high
 
 
 def _check_shapes(net: Network, n_dof: int, source: Path) -> None:

@@ -32,8 +32,11 @@ bounds of :meth:`~LearnedThreshold.bounds` to rounding.
 
 Weights (:mod:`._learned_files`): ``weights=None`` takes the weights shipped
 for the fit runs' robot, a name takes shipped ones, a path a trained file.
-The network counts samples: signals at another sample period than the
-weights' (1 % apart) or another observer gain are refused.
+The network counts samples: signals at a sample period outside the band the
+weights were trained on (``period_range``, e.g. 0.8..1.25 ms for a 1 kHz
+scenario trained at rates of 0.8..1.25 times its own) or, for weights
+trained at one period (no band, weights format 1), more than 1 % from it are
+refused, as is another observer gain.
 
 Examples
 --------
@@ -64,6 +67,9 @@ from .state import ThresholdInputs, ThresholdState
 __all__ = ["LearnedState", "LearnedThreshold"]
 
 _PERIOD_RTOL = 0.01
+"""Tolerance on the period of weights trained at one period (no band) [-]."""
+_BAND_RTOL = 1e-9
+"""Rounding allowed at the edges of a trained band of periods [-]."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -172,6 +178,16 @@ class LearnedThreshold(Threshold):
 
     @staticmethod
     def _check_period(weights: LearnedWeights, dt: float) -> None:
+        if weights.period_range is not None:
+            low, high = weights.period_range
+            if not low * (1.0 - _BAND_RTOL) <= dt <= high * (1.0 + _BAND_RTOL):
+                raise InputValueError(
+                    f"weights trained at sample periods of {low:.6g} to {high:.6g} s "
+                    f"({1.0 / high:.6g} to {1.0 / low:.6g} Hz; the network counts samples); "
+                    f"got {dt:.6g} s ({1.0 / dt:.6g} Hz), outside that band: resample the log or "
+                    "train for this rate"
+                )
+            return
         if not abs(dt - weights.dt) <= _PERIOD_RTOL * weights.dt:
             raise InputValueError(
                 f"weights trained at a sample period of {weights.dt} s (the network counts "

@@ -5,8 +5,9 @@ Prints, in one process:
 * the Pinocchio floor of one observer step: ``crba`` + ``computeCoriolisMatrix``
   + ``computeGeneralizedGravity`` on one sample, median over the samples;
 * per threshold family, the median and p99 [µs] of ``CollisionMonitor.step``
-  and its ratio to the floor, side by side for the Python path and the
-  compiled one (``backend="numba"``, where the family has it);
+  and its ratio to the floor, side by side for the Python path, the numpy
+  stream (``backend="numpy"``) and the compiled one (``backend="numba"``),
+  where the family has them;
 * batch ``CollisionMonitor.run`` in samples/s, Python path (arrays) and
   compiled path (the stream's kernel over the log), beside the bare loop of
   the three Pinocchio calls over the same samples.
@@ -79,20 +80,21 @@ def main() -> None:
     print(f"Panda (7 joints), {n} samples, median of {REPEATS} runs")
     print(f"Pinocchio floor (crba + Coriolis + gravity, one sample): {1e6 * floor:.2f} µs")
     columns = f"{'median µs':>11}{'p99 µs':>9}{'× floor':>9}"
-    print(f"{'':<14}{'python':^29}   {'numba':^29}")
-    print(f"{'family':<14}{columns}   {columns}")
+    print(f"{'':<14}" + "   ".join(f"{b:^29}" for b in ("python", "numpy", "numba")))
+    print(f"{'family':<14}" + "   ".join([columns] * 3))
     for method in FAMILIES:
         threshold, settings = tune(free, nominal, method, margin=0.05, folds=None)
-        row = f"{method:<14}"
-        for backend in ("python", "numba"):
-            if backend == "numba" and (method not in COMPILED or not numba_available()):
-                row += f"   {'(Python path only)':^29}"
+        cells = []
+        for backend in ("python", "numpy", "numba"):
+            if backend != "python" and (
+                method not in COMPILED or (backend == "numba" and not numba_available())
+            ):
+                cells.append(f"{'(Python path only)':^29}")
                 continue
             monitor = CollisionMonitor(nominal, threshold, settings, backend=backend)
             median, p99 = step_cost(monitor, log.t[:n], log.q[:n], log.tau_m[:n])
-            row += f"{'   ' if backend == 'numba' else ''}{1e6 * median:>11.2f}{1e6 * p99:>9.2f}"
-            row += f"{median / floor:>9.2f}"
-        print(row)
+            cells.append(f"{1e6 * median:>11.2f}{1e6 * p99:>9.2f}{median / floor:>9.2f}")
+        print(f"{method:<14}" + "   ".join(cells))
 
     threshold, settings = tune(free, nominal, "time-variant", margin=0.05, folds=None)
     rates = {}

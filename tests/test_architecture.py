@@ -53,19 +53,24 @@ def test_the_log_path_converts_once(monitor_and_log, backend) -> None:
     assert _calls(_validation.as_joint_array, lambda: monitor.run(log)) == expected
 
 
-@pytest.mark.parametrize("backend", ["python", "numba"])
+@pytest.mark.parametrize("backend", ["python", "numpy", "numba"])
 def test_a_stream_step_converts_each_input_once(monitor_and_log, backend, monkeypatch) -> None:
     monitor, log = monitor_and_log
     if backend == "numba" and not numba_available():
         pytest.skip("numba is not installed")
     monitor = CollisionMonitor(monitor.robot, monitor.threshold, monitor.settings, backend=backend)
+    assert monitor.backend == backend
     for k in range(400):  # past the settling window: the whole pipeline runs
         monitor.step(log.t[k], log.q[k], log.tau_m[k])
 
     def one_step() -> None:
         monitor.step(log.t[400], log.q[400], log.tau_m[400])
 
-    # The Python path converts with as_sample; the compiled one inline, with the same call.
+    def one_step_of_lists() -> None:
+        monitor.step(log.t[401], log.q[401].tolist(), log.tau_m[401].tolist())
+
+    # The Python path converts with as_sample; the others hand float64 arrays to their
+    # entry as they are (numba's signatures check them) and convert anything else once.
     conversions: list[object] = []
 
     def counted(x: object, dtype: object) -> np.ndarray:
@@ -74,8 +79,11 @@ def test_a_stream_step_converts_each_input_once(monitor_and_log, backend, monkey
 
     monkeypatch.setattr(stream_module, "_contiguous", counted)
     as_sample_calls = _calls(_validation.as_sample, one_step)
-    assert as_sample_calls + len(conversions) == 2  # q and tau_m
-    assert as_sample_calls == (2 if backend == "python" else 0)
+    if backend == "python":
+        assert (as_sample_calls, len(conversions)) == (2, 0)  # q and tau_m
+    else:
+        assert (as_sample_calls, len(conversions)) == (0, 0)
+        assert _calls(_validation.as_sample, one_step_of_lists) + len(conversions) == 2
     assert _calls(_validation.as_joint_array, one_step) == 0
 
 

@@ -49,13 +49,29 @@ from .._validation import FloatArray
 from ..friction._static_kernel import sign, static_torque
 from ..observers._adaptive_kernel import compiled_rows as adapter_rows
 from ..robots._recursion_numba import terms_at
+from ._codes import (
+    COLLISION,
+    EVENT,
+    FAULT,
+    FAULT_BOUNDS,
+    FAULT_EARLY,
+    FAULT_GAP,
+    FAULT_OBSERVER,
+    FAULT_Q,
+    FAULT_TAU_J,
+    FAULT_TAU_M,
+    FAULT_TIME,
+    FAULT_VELOCITY,
+    JOINTS_SHIFT,
+    OK,
+    SETTLING,
+    UNJUDGED,
+)
 
 __all__ = [
     "BLOCK_SIGNATURE",
-    "REASONS",
     "SAMPLE_SIGNATURES",
     "SIGNATURE",
-    "STATUSES",
     "fused_block",
     "fused_step",
     "fused_step_sample",
@@ -83,14 +99,6 @@ N_FLAGS = 16
 # threshold families (friction kinds: sensorless.friction._kinds)
 CONSTANT, TIME_VARIANT, HYSTERETIC_FORM, VELOCITY_BINS = range(4)
 # codes: status (low 4 bits; faults from FAULT on), EVENT bit, joints mask from JOINTS_SHIFT on
-OK, COLLISION, SETTLING, FAULT_TIME, FAULT_Q, FAULT_TAU_M, FAULT_TAU_J = range(7)
-FAULT_EARLY, FAULT_GAP, FAULT_VELOCITY, FAULT_OBSERVER, FAULT_BOUNDS = range(7, 12)
-FAULT, EVENT, JOINTS_SHIFT = FAULT_TIME, 16, 5
-UNJUDGED = 15  # fused_step_sample: a sample it does not judge (shapes, time); nothing changed
-MAX_JOINTS = 58  # the joints mask fits in an int64 beside the status bits
-STATUSES = ("ok", "collision", "settling")
-REASONS = ("time", "q", "tau_m", "tau_j", "early", "gap", "qd", "observer", "bounds")
-"""What a fault refused: a time not past the last, a limit, a time rule, a non-finite result."""
 
 _READ = types.Array(types.float64, 1, "C", readonly=True)
 _READ2 = types.Array(types.float64, 2, "C", readonly=True)

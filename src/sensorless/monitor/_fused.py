@@ -23,6 +23,7 @@ from ..observers._adaptive_kernel import temporaries_size
 from ..signals import Event
 from ..thresholds import ConstantThreshold, Threshold, TimeVariantThreshold, VelocityThreshold
 from . import _compiled as kernel
+from ._codes import EVENT, FAULT, JOINTS_SHIFT, MAX_JOINTS, REASONS, SETTLING, STATUSES, UNJUDGED
 
 if TYPE_CHECKING:
     from .stream import CollisionMonitor
@@ -33,8 +34,6 @@ _FAMILIES = (ConstantThreshold, TimeVariantThreshold, VelocityThreshold)
 # Bound once: each attribute lookup on the module costs as much as a line of arithmetic.
 _fused_step, _fused_block = kernel.fused_step, kernel.fused_block
 _fused_step_sample = kernel.fused_step_sample
-_FAULT, _EVENT = kernel.FAULT, kernel.EVENT
-_JOINTS_SHIFT, _REASONS, _STATUSES = kernel.JOINTS_SHIFT, kernel.REASONS, kernel.STATUSES
 _THRESHOLD_ROWS = [kernel.MODEL_TORQUE, kernel.FILTERED_FRICTION, kernel.FILTERED_SIGN,
                    kernel.VELOCITY]  # fmt: skip
 
@@ -49,10 +48,8 @@ def unsupported(monitor: CollisionMonitor) -> str:
         return f"the {threshold.name!r} threshold family runs on the Python path only"
     if friction is not None and type(friction) not in STATIC_KINDS:
         return f"the friction model {type(friction).__name__} runs on the Python path only"
-    if n_dof > kernel.MAX_JOINTS:
-        return (
-            f"the compiled stream handles at most {kernel.MAX_JOINTS} joints; the robot has {n_dof}"
-        )
+    if n_dof > MAX_JOINTS:
+        return f"the compiled stream handles at most {MAX_JOINTS} joints; the robot has {n_dof}"
     return ""
 
 
@@ -71,8 +68,7 @@ class FusedStream:
         window are read once.
     """
 
-    FAULT, SETTLING, EVENT, UNJUDGED = kernel.FAULT, kernel.SETTLING, kernel.EVENT, kernel.UNJUDGED
-    JOINTS_SHIFT = kernel.JOINTS_SHIFT
+    FAULT, SETTLING, EVENT, UNJUDGED, JOINTS_SHIFT = FAULT, SETTLING, EVENT, UNJUDGED, JOINTS_SHIFT
 
     def __init__(self, monitor: CollisionMonitor) -> None:
         observer, policy, detector = monitor._observer, monitor.policy, monitor.detector
@@ -170,21 +166,21 @@ class FusedStream:
 
         ``sample`` is (q, qd, tau_m, tau_j), ``qd`` empty without a measured
         velocity. Returns the status ("ok", "collision", "settling") or, for a
-        fault, what was refused (an entry of ``REASONS`` in :mod:`._compiled`);
+        fault, what was refused (an entry of ``REASONS`` in :mod:`._codes`);
         the joints outside their bounds; the event that closed at the sample
         (found by ``method``), if any.
         """
         q, qd, tau_m, tau_j = sample
         code = self.step(time, q, qd, tau_m, tau_j, self._model, self._buffers, out)
         status = code & 15
-        if status >= _FAULT:
-            return _REASONS[status - _FAULT], (), None
-        event = self.closed(method) if code & _EVENT else None
-        return _STATUSES[status], self.joints(code), event
+        if status >= FAULT:
+            return REASONS[status - FAULT], (), None
+        event = self.closed(method) if code & EVENT else None
+        return STATUSES[status], self.joints(code), event
 
     def joints(self, code: int) -> tuple[int, ...]:
         """The joints (1-based) outside their bounds, from a return code of the kernel."""
-        mask = code >> _JOINTS_SHIFT
+        mask = code >> JOINTS_SHIFT
         return _joints(mask) if self._masks is None else self._masks[mask]
 
     def closed(self, method: str) -> Event:
@@ -213,14 +209,14 @@ class FusedStream:
         closed = np.zeros((n_samples, 5))
         _fused_block(t, q, qd, tau_m, tau_j, self._model, buffers, series, codes, closed)
         flags = buffers[: 3 * kernel.N_FLAGS].reshape(3, kernel.N_FLAGS)
-        events = [_event(row, method) for row in closed[np.flatnonzero(codes & _EVENT)].tolist()]
+        events = [_event(row, method) for row in closed[np.flatnonzero(codes & EVENT)].tolist()]
         last = self._finish(flags[0], method)
         return codes, series, events if last is None else [*events, last]
 
     @staticmethod
     def reason(status: int) -> str:
-        """What a fault status refused (an entry of ``REASONS`` in :mod:`._compiled`)."""
-        return _REASONS[status - _FAULT]
+        """What a fault status refused (an entry of ``REASONS`` in :mod:`._codes`)."""
+        return REASONS[status - FAULT]
 
     @property
     def floor(self) -> float:

@@ -17,6 +17,7 @@ from .._validation import FloatArray
 from ..friction.static import Coulomb, CoulombViscous, HystereticError, Viscous
 from ..signals import Event
 from ..thresholds import ConstantThreshold, TimeVariantThreshold, VelocityThreshold
+from ._codes import COLLISION, JOINTS_SHIFT, OK
 
 __all__ = [
     "Bounds",
@@ -267,7 +268,7 @@ class EventRules:
         fl.outside = mask != 0
         if mask and fl.open and time - fl.open_start >= self._min_duration:
             fl.latched, fl.inside_since = True, math.nan
-            return COLLISION | mask << 5, closed
+            return COLLISION | mask << JOINTS_SHIFT, closed
         if fl.latched and not math.isnan(self._release):
             if mask:
                 fl.inside_since = math.nan
@@ -275,7 +276,7 @@ class EventRules:
                 fl.inside_since = time
             if time - fl.inside_since >= self._release:
                 fl.latched, fl.inside_since = False, math.nan
-        return (COLLISION if fl.latched else OK) | mask << 5, closed
+        return (COLLISION if fl.latched else OK) | mask << JOINTS_SHIFT, closed
 
     def lasted(self, fl: Flags) -> tuple[float, ...]:
         """The open event's fields if it lasted ``min_duration``, else ()."""
@@ -336,8 +337,6 @@ def event(fields: tuple[float, ...], method: str) -> Event:
 def joints(mask: int) -> tuple[int, ...]:
     return tuple(j + 1 for j in range(mask.bit_length()) if mask >> j & 1)
 
-
-OK, COLLISION = 0, 1  # status codes, as the compiled kernel's
 
 # Bound once: each module attribute lookup costs as much as a line of arithmetic.
 _multiply, _add, _subtract, _dot = np.multiply, np.add, np.subtract, np.dot

@@ -45,6 +45,27 @@ from ..detection import TIME_TOLERANCE
 from ..friction.static import Coulomb, CoulombViscous, HystereticError, Viscous
 from ..signals import Event
 from ..thresholds import ConstantThreshold, TimeVariantThreshold, VelocityThreshold
+from ._codes import (
+    COLLISION,
+    EVENT,
+    FAULT,
+    FAULT_BOUNDS,
+    FAULT_EARLY,
+    FAULT_GAP,
+    FAULT_OBSERVER,
+    FAULT_Q,
+    FAULT_TAU_J,
+    FAULT_TAU_M,
+    FAULT_TIME,
+    FAULT_VELOCITY,
+    JOINTS_SHIFT,
+    MAX_JOINTS,
+    OK,
+    REASONS,
+    SETTLING,
+    STATUSES,
+    UNJUDGED,
+)
 from ._numpy_parts import (
     BIN,
     C1,
@@ -81,14 +102,8 @@ from ._numpy_parts import event as make_event
 if TYPE_CHECKING:
     from .stream import CollisionMonitor
 
-__all__ = ["REASONS", "NumpyStream", "unsupported"]
+__all__ = ["NumpyStream", "unsupported"]
 
-# Status codes, as those of the compiled kernel (``code & 15``; EVENT bit; joints mask).
-OK, COLLISION, SETTLING, FAULT_TIME, FAULT_Q, FAULT_TAU_M, FAULT_TAU_J = range(7)
-FAULT_EARLY, FAULT_GAP, FAULT_VELOCITY, FAULT_OBSERVER, FAULT_BOUNDS = range(7, 12)
-FAULT, EVENT, JOINTS_SHIFT, MAX_JOINTS, UNJUDGED = FAULT_TIME, 16, 5, 58, 15
-STATUSES = ("ok", "collision", "settling")
-REASONS = ("time", "q", "tau_m", "tau_j", "early", "gap", "qd", "observer", "bounds")
 _FAMILIES = (ConstantThreshold, TimeVariantThreshold, VelocityThreshold)
 _BASIS_FRICTION = (Coulomb, Viscous, CoulombViscous, HystereticError)
 
@@ -208,7 +223,7 @@ class NumpyStream:
         self, time: float, q: FloatArray, qd: FloatArray, tau_m: FloatArray, tau_j: FloatArray,
         out: FloatArray,
     ) -> int:  # fmt: skip
-        """One sample; returns the kernel's code (status | ``EVENT`` | joints mask << 5)."""
+        """One sample; returns its code (:mod:`._codes`)."""
         fl = self._flags
         if time <= fl.floor:
             return FAULT_TIME
@@ -391,7 +406,7 @@ class NumpyStream:
         velocity; ``out`` (3, n_dof) receives the residual and the bounds [N m]
         (NaN bounds while settling). Returns the status ("ok", "collision",
         "settling") or, for a fault, what was refused (an entry of
-        :data:`REASONS`); the joints outside their bounds; the event that
+        :data:`~._codes.REASONS`); the joints outside their bounds; the event that
         closed at the sample (found by ``method``), if any.
         """
         code = self._step(time, *sample, out)
@@ -454,7 +469,7 @@ class NumpyStream:
 
     @staticmethod
     def reason(status: int) -> str:
-        """What a fault status refused (an entry of :data:`REASONS`)."""
+        """What a fault status refused (an entry of :data:`~._codes.REASONS`)."""
         return REASONS[status - FAULT]
 
     @property

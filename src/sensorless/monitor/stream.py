@@ -13,7 +13,6 @@ against. Units SI and radians; time along axis 0.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from types import ModuleType
 from typing import TYPE_CHECKING, Any, cast
 
@@ -21,7 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._validation import FloatArray, as_sample, check_dt
-from ..detection import TIME_TOLERANCE, Detector, DetectorState, Status, Verdict
+from ..detection import Detector, Status, Verdict
 from ..exceptions import (
     DimensionError,
     InputTypeError,
@@ -30,17 +29,18 @@ from ..exceptions import (
     UnknownNameError,
 )
 from ..io import Log
-from ..observers import AccelerationObserver, MomentumObserver, ObserverSample, ObserverState
-from ..observers.adaptive import AdapterState
+from ..observers import AccelerationObserver, MomentumObserver, ObserverSample
 from ..robots.model import RobotModel
 from ..signals import Event, ObserverSignals
-from ..thresholds import ModelBasedThreshold, Threshold, ThresholdInputs
+from ..thresholds import ModelBasedThreshold, Threshold
 from ..thresholds.checks import other_model, parameters_differ
 from ..thresholds.files import family_name
+from ._codes import EVENT, FAULT, JOINTS_SHIFT, UNJUDGED
 from ._numpy_stream import NumpyStream
 from ._numpy_stream import unsupported as numpy_unsupported
+from ._python_stream import PythonStream, judge
 from .adaptation import Adaptation
-from .batch import BOUNDS_FAULT, OBSERVER_FAULT, MonitorRun, run_log, value_fault
+from .batch import MonitorRun, run_log, value_fault
 from .policy import StreamPolicy
 from .tuning import ObserverSettings
 
@@ -55,34 +55,12 @@ except ImportError:  # numba is an optional extra
 
 __all__ = ["BACKENDS", "CollisionMonitor"]
 
-# Codes of the compiled stream's return value (see _compiled); unused without numba.
-_FAULT_CODE, _EVENT_CODE, _JOINTS_CODE, _UNJUDGED = (
-    (3, 16, 32, 15)
-    if _fused is None
-    else (
-        _fused.FusedStream.FAULT,
-        _fused.FusedStream.EVENT,
-        1 << _fused.FusedStream.JOINTS_SHIFT,  # the smallest code with a joint outside
-        _fused.FusedStream.UNJUDGED,
-    )
-)
+# The smallest code with a joint outside its bounds (see _codes).
+_JOINTS_CODE = 1 << JOINTS_SHIFT
 
 #: Stream backends of :class:`CollisionMonitor`.
 BACKENDS = ("auto", "numba", "numpy", "python")
 _STATUSES: tuple[Status, ...] = ("ok", "collision", "settling")
-
-
-@dataclass
-class _Stream:
-    """Mutable state of a live stream; replaced field by field only after a good sample."""
-
-    start: float  # time of the (re)start [s]
-    t: float  # time of the last accepted sample [s]
-    estimator: Any  # section states (position, velocity, acceleration) of the estimator
-    observer: ObserverState | None  # None for the acceleration-based estimate
-    detector: DetectorState | None  # None while settling
-    adapter: AdapterState | None = None  # drift adaptation, if any
-    quiet_from: float = -math.inf  # the adapter may learn from this time on [s]
 
 
 class CollisionMonitor:
@@ -297,7 +275,7 @@ class CollisionMonitor:
     # ----------------------------------------------------------------- stream
     def reset(self) -> None:
         """Forget the stream and release a latched collision: the next sample starts anew."""
-        self._stream: _Stream | None = None
+        self._stream: PythonStream | None = None
         self._pending = -math.inf  # time of the last faulted sample that may end a gap
         self._floor = -math.inf  # no sample may come at or before this time
         self._latched = False
@@ -351,13 +329,13 @@ class CollisionMonitor:
                 sensed = tau_j if self._joint else tau_m
                 code = function(float(t), q, tau_m, sensed, model, buffers, out)
             except Exception:  # a type its signatures refuse: the checks below say why
-                code = _UNJUDGED
+                code = UNJUDGED
             status = code & 15
-            if status < _FAULT_CODE:
+            if status < FAULT:
                 joints = () if code < _JOINTS_CODE else fused.joints(code)
-                event = fused.closed(self._method) if code & _EVENT_CODE else None
+                event = fused.closed(self._method) if code & EVENT else None
                 return Verdict._of_rows(_STATUSES[status], float(t), joints, out, event)
-            if status != _UNJUDGED:
+            if status != UNJUDGED:
                 time, reason = float(t), fused.reason(status)
                 sample = cast("tuple[FloatArray, ...]", (q, _EMPTY, tau_m, sensed))
                 return self._fault(time, self._fused_fault(fused, reason, time, sample))
@@ -388,7 +366,7 @@ class CollisionMonitor:
                     self._pending = time
                     return self._fault(time, self._gap_message(step))
         try:
-            return self._judge(stream, restart, time, (q_arr, qd_arr, tau))
+            return judge(self, stream, restart, time, (q_arr, qd_arr, tau))
         except Exception as exc:  # fail-safe: no data may crash the stream
             return self._fault(time, f"the sample could not be processed: {exc!r}")
 
@@ -482,134 +460,6 @@ class CollisionMonitor:
                 return _EMPTY, None, _EMPTY, self.limits.describe(name, tau)
         return q_arr, qd_arr, tau, ""
 
-    def _judge(
-        self,
-        stream: _Stream | None,
-        restart: bool,
-        time: float,
-        columns: tuple[FloatArray, FloatArray | None, FloatArray],
-    ) -> Verdict:
-        """Run a sample with good inputs through the pipeline; commit only if all is finite.
-
-        ``columns``: q [rad], the measured q̇ [rad/s] or None, τ [N m].
-        """
-        q, measured, tau = columns
-        closed: Event | None = None
-        if restart:
-            if stream is not None and stream.detector is not None:
-                closed = self.detector.finish(stream.detector)[0]
-            initial = self._estimator.initial_state(q)
-            estimator = (initial.position, initial.velocity, initial.acceleration)
-            observer = (
-                None
-                if self.settings.kind == "acceleration"
-                else self._observer._initial_state_checked(
-                    q[None], np.zeros((1, q.size)) if measured is None else measured[None]
-                )
-            )
-            # What the drift adapter learned survives the restart; its filters start anew.
-            learned = None if stream is None else stream.adapter
-            stream = _Stream(time, time, estimator, observer, None, self._adapter_start(learned))
-        assert stream is not None  # set above on a restart
-        adapter = stream.adapter
-        (_, velocity, acceleration), estimator = self._estimator._step_outputs(
-            q, stream.estimator, self._outputs
-        )
-        velocity = cast(FloatArray, velocity if measured is None else measured)
-        if not self.limits.velocity_ok(velocity):
-            self._pending = time
-            return self._fault(time, self.limits.describe("qd", velocity))
-        observer = stream.observer
-        if observer is None:  # acceleration-based estimate: an algebraic function of the sample
-            assert acceleration is not None  # always selected for this observer
-            out = self._observer._estimate(q[None], velocity[None], acceleration[None], tau[None])
-            sample = ObserverSample(*(row[0] for row in out))
-            outputs = np.stack(sample)
-        else:
-            if not restart and stream.t == stream.start:
-                # The first velocity estimate comes with the second sample: the observer
-                # starts there, so a stream that begins in motion has no start-up excursion.
-                observer = self._observer._initial_state_checked(q[None], velocity[None])
-                adapter = self._adapter_start(adapter)
-            sample, observer = self._observer._step_checked(observer, q, velocity, tau)
-            outputs = observer.filtered
-        if not np.isfinite(outputs).all() or (
-            acceleration is not None and not np.isfinite(acceleration).all()
-        ):
-            self._pending = time
-            return self._fault(time, OBSERVER_FAULT)
-        residual, model_torque, friction, sign = sample
-        settling = time - stream.start < self.settle - TIME_TOLERANCE
-        if self._adapter is not None and adapter is not None:
-            trusted = not settling and not self._latched and time >= stream.quiet_from
-            residual, adapter = self._adapter._step_checked(
-                adapter, residual, velocity, self._trust[int(trusted)], model_torque
-            )
-        detector = stream.detector
-        if settling:
-            nan = np.full(self.robot.n_dof, np.nan)
-            verdict = Verdict("settling", time, (), residual, nan, nan.copy(), closed)
-        else:
-            if detector is None:
-                detector = self.detector.initial_state(self.dt)
-            inputs = ThresholdInputs(
-                model_torque[None],
-                friction[None],
-                sign[None],
-                velocity[None],
-                q[None],
-                None if acceleration is None else acceleration[None],
-            )
-            verdict, detector = self.detector._step_checked(detector, residual, inputs, time)
-            if np.isnan(verdict.lower).any() or np.isnan(verdict.upper).any():
-                self._pending = time
-                return self._fault(time, BOUNDS_FAULT)
-            if closed is not None and verdict.event is None:
-                verdict = _with(verdict, verdict.status, closed)
-            verdict = self._latch(verdict)
-        # Commit: the sample was good from end to end.
-        stream.t = time
-        stream.estimator = estimator
-        stream.observer = observer
-        stream.detector = detector
-        stream.adapter = adapter
-        if verdict.joints or verdict.status == "collision":
-            stream.quiet_from = time + self._guard
-        if self._record is not None:
-            self._record.append((time, sample._replace(residual=residual), velocity))
-        self._stream = stream
-        self._floor = time
-        self._pending = -math.inf
-        return verdict
-
-    def _adapter_start(self, learned: AdapterState | None) -> AdapterState | None:
-        """The drift adapter's state at a (re)start: filters from zero, θ and P kept."""
-        if self._adapter is None:
-            return None
-        if learned is None:
-            return self._adapter.initial_state()
-        return self._adapter.restart(learned)
-
-    def _latch(self, verdict: Verdict) -> Verdict:
-        """Apply the latch: a collision stays a collision until released."""
-        if verdict.status == "collision":
-            self._latched = True
-            self._inside_since = math.nan
-            return verdict
-        if not self._latched:
-            return verdict
-        release = self.policy.release
-        if release is not None:
-            if verdict.joints:
-                self._inside_since = math.nan
-            elif math.isnan(self._inside_since):
-                self._inside_since = verdict.t
-            if verdict.t - self._inside_since >= release - TIME_TOLERANCE:
-                self._latched = False
-                self._inside_since = math.nan
-                return verdict
-        return _with(verdict, "collision", verdict.event)
-
     def _fault(self, time: float, message: str) -> Verdict:
         nan = np.full(self._n_dof, np.nan)
         return Verdict("fault", time, (), nan, nan.copy(), nan.copy(), None, message)
@@ -633,16 +483,3 @@ class CollisionMonitor:
 _EMPTY = np.empty(0)
 _FLOAT = np.dtype(np.float64)
 _contiguous, _empty = np.ascontiguousarray, np.empty
-
-
-def _with(verdict: Verdict, status: Any, event: Event | None) -> Verdict:
-    return Verdict(
-        status,
-        verdict.t,
-        verdict.joints,
-        verdict.residual,
-        verdict.lower,
-        verdict.upper,
-        event,
-        verdict.message,
-    )

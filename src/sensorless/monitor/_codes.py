@@ -6,10 +6,16 @@ low four bits (``OK``, ``COLLISION``, ``SETTLING``, then the faults from
 ``EVENT`` bit when an event closed at the sample, and the joints outside
 their bounds as a bit mask (bit j: joint j + 1). ``UNJUDGED``: the entry of
 the common sample did not judge it and changed nothing; the Python checks
-say why. Imports nothing, so that the numpy stream runs without numba.
+say why. :func:`refusal` holds what both streams decline. Imports nothing at
+run time, so that the numpy stream runs without numba.
 """
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .stream import CollisionMonitor
 
 __all__ = [
     "COLLISION",
@@ -31,6 +37,7 @@ __all__ = [
     "SETTLING",
     "STATUSES",
     "UNJUDGED",
+    "refusal",
 ]
 
 OK, COLLISION, SETTLING, FAULT_TIME, FAULT_Q, FAULT_TAU_M, FAULT_TAU_J = range(7)
@@ -41,3 +48,17 @@ MAX_JOINTS = 58  # the joints mask fits in an int64 beside the status bits
 STATUSES = ("ok", "collision", "settling")
 REASONS = ("time", "q", "tau_m", "tau_j", "early", "gap", "qd", "observer", "bounds")
 """What a fault refused: a time not past the last, a limit, a time rule, a non-finite result."""
+
+
+def refusal(monitor: CollisionMonitor, families: tuple[type, ...], stream: str) -> str:
+    """Why neither the compiled nor the numpy stream (``stream`` names it) runs ``monitor``:
+    its observer kind, threshold family (not one of ``families``) or joint count ("" if none).
+    """
+    kind, threshold, n_dof = monitor.settings.kind, monitor.threshold, monitor.robot.n_dof
+    if kind not in ("motor", "joint"):
+        return f"the {kind!r} observer runs on the Python path only"
+    if type(threshold) not in families:
+        return f"the {threshold.name!r} threshold family runs on the Python path only"
+    if n_dof > MAX_JOINTS:
+        return f"the {stream} handles at most {MAX_JOINTS} joints; the robot has {n_dof}"
+    return ""

@@ -23,7 +23,7 @@ from ..observers._adaptive_kernel import temporaries_size
 from ..signals import Event
 from ..thresholds import ConstantThreshold, Threshold, TimeVariantThreshold, VelocityThreshold
 from . import _compiled as kernel
-from ._codes import EVENT, FAULT, JOINTS_SHIFT, MAX_JOINTS, REASONS, SETTLING, STATUSES, UNJUDGED
+from ._codes import EVENT, FAULT, JOINTS_SHIFT, REASONS, SETTLING, STATUSES, UNJUDGED, refusal
 
 if TYPE_CHECKING:
     from .stream import CollisionMonitor
@@ -40,17 +40,10 @@ _THRESHOLD_ROWS = [kernel.MODEL_TORQUE, kernel.FILTERED_FRICTION, kernel.FILTERE
 
 def unsupported(monitor: CollisionMonitor) -> str:
     """Why the compiled stream cannot run ``monitor`` ("" when it can)."""
-    kind, threshold, n_dof = monitor.settings.kind, monitor.threshold, monitor.robot.n_dof
     friction = getattr(monitor._observer, "friction_model", None)
-    if kind not in ("motor", "joint"):
-        return f"the {kind!r} observer runs on the Python path only"
-    if type(threshold) not in _FAMILIES:
-        return f"the {threshold.name!r} threshold family runs on the Python path only"
     if friction is not None and type(friction) not in STATIC_KINDS:
         return f"the friction model {type(friction).__name__} runs on the Python path only"
-    if n_dof > MAX_JOINTS:
-        return f"the compiled stream handles at most {MAX_JOINTS} joints; the robot has {n_dof}"
-    return ""
+    return refusal(monitor, _FAMILIES, "compiled stream")
 
 
 class FusedStream:

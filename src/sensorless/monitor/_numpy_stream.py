@@ -59,12 +59,12 @@ from ._codes import (
     FAULT_TIME,
     FAULT_VELOCITY,
     JOINTS_SHIFT,
-    MAX_JOINTS,
     OK,
     REASONS,
     SETTLING,
     STATUSES,
     UNJUDGED,
+    refusal,
 )
 from ._numpy_parts import (
     BIN,
@@ -110,16 +110,9 @@ _BASIS_FRICTION = (Coulomb, Viscous, CoulombViscous, HystereticError)
 
 def unsupported(monitor: CollisionMonitor) -> str:
     """Why the numpy stream cannot run ``monitor`` ("" when it can)."""
-    kind, threshold, n_dof = monitor.settings.kind, monitor.threshold, monitor.robot.n_dof
-    if kind not in ("motor", "joint"):
-        return f"the {kind!r} observer runs on the Python path only"
-    if type(threshold) not in _FAMILIES:
-        return f"the {threshold.name!r} threshold family runs on the Python path only"
     if monitor._adapter is not None:
         return "drift adaptation runs on the Python and numba paths only"
-    if n_dof > MAX_JOINTS:
-        return f"the numpy stream handles at most {MAX_JOINTS} joints; the robot has {n_dof}"
-    return ""
+    return refusal(monitor, _FAMILIES, "numpy stream")
 
 
 class NumpyStream:

@@ -9,6 +9,7 @@ numba. Units SI and radians.
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from typing import Any
 
 import numpy as np
@@ -163,15 +164,13 @@ class Bounds:
             axis=-1,
         )  # (n_edges + 1, n_dof, 3)
         table[:, ~monitored] = (0.0, -np.inf, np.inf)
-        self._search = edges.searchsorted  # bound methods: no Python wrapper per call
-        self._takes = [np.ascontiguousarray(table[..., i].reshape(-1)).take for i in range(3)]
-        self._gathered = np.empty((3, n))
-        self._columns = np.arange(n)
+        # Python floats: for a handful of joints, a loop over lists costs less than the
+        # dozen small numpy calls of the same arithmetic (same operations, same order).
+        self._edges = edges.tolist()
+        self._table = [table[..., i].reshape(-1).tolist() for i in range(3)]
         step = np.broadcast_to(threshold.gain_, (n,)) * dt  # the filter of first_order
-        self._bin_pole, self._bin_weight = np.exp(-step), -np.expm1(-step)
-        self._gamma = np.where(monitored, threshold.gamma_, 0.0)
-        self._pair = np.empty((2, n))
-        self._pair_flat = self._pair.reshape(-1)
+        self._filter = list(zip(np.exp(-step).tolist(), (-np.expm1(-step)).tolist(), strict=True))
+        self._gamma = np.where(monitored, threshold.gamma_, 0.0).tolist()
 
     def __call__(
         self, s_block: FloatArray, s_rows: FloatArray, c_block: FloatArray, start: bool,
@@ -199,25 +198,30 @@ class Bounds:
     def _bins(
         self, s_block: FloatArray, c_block: FloatArray, start: bool, out: FloatArray
     ) -> list[float]:
-        """The velocity-bin threshold (``table_bounds``) on the new block."""
-        v = s_block[V]
-        index = self._search(v, "right")
-        index *= v.shape[0]
-        index += self._columns
-        gathered = self._gathered  # τ_fme, L, U
-        for take, row in zip(self._takes, gathered, strict=True):
-            take(index, out=row)
-        fme = gathered[0]
-        friction = fme if start else c_block[BIN]
-        _add(self._bin_weight * fme, self._bin_pole * friction, out=s_block[BIN])
-        centre = self._gamma * s_block[H]
-        centre += friction
-        out[0] = s_block[R]
-        _add(gathered[1:], centre, out=out[1:])
-        pair = self._pair  # r̂ − U and L − r̂ (no product: 0 · ∞ for a joint not monitored)
-        _subtract(out[0], out[2], out=pair[0])
-        _subtract(out[1], out[0], out=pair[1])
-        return self._pair_flat.tolist()
+        """The velocity-bin threshold (``table_bounds``) on the new block, joint by joint.
+
+        The bin is ``bisect_right(edges, q̇)`` (``searchsorted(..., "right")``);
+        the filter of τ_fme starts at ``start``.
+        """
+        residual = s_block[R].tolist()
+        velocity, h = s_block[V].tolist(), s_block[H].tolist()
+        last = None if start else c_block[BIN].tolist()
+        n, edges, (fme_of, lower_of, upper_of) = len(residual), self._edges, self._table
+        filtered, lower, upper, above, below = [], [], [], [], []
+        for j, (pole, weight) in enumerate(self._filter):
+            k = bisect_right(edges, velocity[j]) * n + j
+            fme = fme_of[k]
+            friction = fme if last is None else last[j]
+            filtered.append(weight * fme + pole * friction)
+            centre = self._gamma[j] * h[j] + friction
+            low, high = lower_of[k] + centre, upper_of[k] + centre
+            lower.append(low)
+            upper.append(high)
+            above.append(residual[j] - high)  # no product: 0 · ∞ for a joint not monitored
+            below.append(low - residual[j])
+        s_block[BIN] = filtered
+        out[...] = (residual, lower, upper)
+        return above + below
 
 
 class EventRules:

@@ -401,7 +401,12 @@ def test_bad_training_ranges_and_bands_are_clear_errors(tmp_path):
     for change, message in bad:
         with pytest.raises(InputValueError, match=message):
             run_draws(TrainingRecipe(minutes=1 / 60, run_seconds=1.0, **change))
-    path = _banded(tmp_path, 2e-3, 1e-3)
+    with pytest.raises(InputValueError, match=r"period_range must be \(low, high\) \[s\]"):
+        _banded(tmp_path, 2e-3, 1e-3)
+    path = _banded(tmp_path)  # a file whose band was edited by hand is refused on reading
+    meta = json.loads(path.read_text())
+    meta["period_range"] = [2e-3, 1e-3]
+    path.write_text(json.dumps(meta))
     with pytest.raises(
         FileFormatError, match=r"period_range must be \[low, high\] \[s\] with 0 < low <= high"
     ):

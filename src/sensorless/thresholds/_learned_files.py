@@ -29,7 +29,13 @@ import numpy as np
 
 from .._validation import FloatArray
 from .._version import __version__
-from ..exceptions import FileFormatError, InputTypeError, MissingFileError, UnknownNameError
+from ..exceptions import (
+    FileFormatError,
+    InputTypeError,
+    InputValueError,
+    MissingFileError,
+    UnknownNameError,
+)
 from ._cnn import CHANNELS, Network
 
 __all__ = [
@@ -120,6 +126,11 @@ def save_weights(weights: LearnedWeights, path: str | Path) -> Path:
     """
     if not isinstance(weights, LearnedWeights):
         raise InputTypeError(f"weights must be LearnedWeights; got {type(weights).__name__}")
+    band = weights.period_range
+    if band is not None and not 0.0 < band[0] <= band[1] < np.inf:
+        raise InputValueError(
+            f"period_range must be (low, high) [s] with 0 < low <= high; got {band}"
+        )
     stem = _stem(path)
     buffer = io.BytesIO()
     np.savez(buffer, allow_pickle=False, **_arrays(weights.network))

@@ -87,22 +87,28 @@ def _samples(log, stop=None, joint=False):
         yield (log.t[k], log.q[k], log.tau_m[k], log.tau_j[k] if joint else None)
 
 
-def _assert_same(got, expected) -> None:
-    """Verdicts of the two backends: equal statuses, joints, events and messages."""
-    assert (got.status, got.t, got.joints, got.message) == (
-        expected.status,
-        expected.t,
-        expected.joints,
-        expected.message,
-    )
-    _assert_same_event(got.event, expected.event)
+def assert_same(got, expected) -> None:
+    """Verdicts of two backends: equal statuses, joints, events and messages; rows within
+    TOLERANCE (also used by ``test_monitor_numpy_stream``)."""
+    assert_same_verdict(got, expected)
     for name in ("residual", "lower", "upper"):
         np.testing.assert_allclose(
             getattr(got, name), getattr(expected, name), rtol=0.0, atol=TOLERANCE, err_msg=name
         )
 
 
-def _assert_same_event(got, expected) -> None:
+def assert_same_verdict(got, expected) -> None:
+    """Equal statuses, times, joints, messages and events (peaks within TOLERANCE)."""
+    assert (got.status, got.t, got.joints, got.message) == (
+        expected.status,
+        expected.t,
+        expected.joints,
+        expected.message,
+    )
+    assert_same_event(got.event, expected.event)
+
+
+def assert_same_event(got, expected) -> None:
     if expected is None:
         assert got is None
         return
@@ -125,10 +131,10 @@ def _run_both(compiled, python, samples):
     statuses, messages = [], set()
     for sample in samples:
         expected = python.step(*sample)
-        _assert_same(compiled.step(*sample), expected)
+        assert_same(compiled.step(*sample), expected)
         statuses.append(expected.status)
         messages.add(expected.message)
-    _assert_same_event(compiled.finish(), python.finish())
+    assert_same_event(compiled.finish(), python.finish())
     assert compiled.latched == python.latched
     return statuses, messages
 
@@ -204,7 +210,7 @@ def test_every_form_of_a_sample_gives_the_same_stream(scenarios, form) -> None:
     statuses = []
     for t, q, tau, _ in _samples(test, stop=1500):
         expected = plain.step(float(t), q.copy(), tau.copy())
-        _assert_same(expected, python.step(t, q, tau))
+        assert_same(expected, python.step(t, q, tau))
         got = given.step(*FORMS[form](t, q, tau))
         assert (got.status, got.t, got.joints, got.event, got.message) == (
             expected.status, expected.t, expected.joints, expected.event, expected.message,
@@ -258,7 +264,7 @@ def test_a_fault_changes_nothing(scenarios, method) -> None:
                 np.testing.assert_array_equal(fused._state[0], before[1])
         expected = clean.step(*sample)
         got = compiled.step(*sample)
-        _assert_same(got, python.step(*sample))
+        assert_same(got, python.step(*sample))
         # The stream goes on as if the faults never came.
         assert (got.status, got.joints, got.event) == (
             expected.status,
@@ -367,7 +373,7 @@ def _assert_same_run(got, expected) -> None:
     np.testing.assert_array_equal(got.settling, expected.settling)
     assert _key(got.events) == _key(expected.events)
     for a, b in zip(got.events, expected.events, strict=True):
-        _assert_same_event(a, b)
+        assert_same_event(a, b)
     for name in ("residual", "model_torque", "friction", "sign", "velocity"):
         np.testing.assert_allclose(
             getattr(got.signals, name),

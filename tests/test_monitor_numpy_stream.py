@@ -33,6 +33,7 @@ from sensorless.monitor._numpy_stream import NumpyStream, unsupported
 from sensorless.observers import MomentumObserver
 from sensorless.robots.recursion import MomentumTerms, numba_available
 from sensorless.simulation.scenario import load_scenario
+from test_monitor_compiled import assert_same_event, assert_same_verdict
 
 FAMILIES = ("constant", "time-variant", "hysteretic", "velocity")
 TOLERANCE = 1e-9  # N m, residuals and bounds
@@ -83,22 +84,6 @@ def _samples(log, stop=None):
         yield log.t[k], log.q[k], log.tau_m[k]
 
 
-def _assert_same(got, expected) -> None:
-    """Same verdict: status, time, joints, message and event; rows within TOLERANCE."""
-    _assert_same_verdict(got, expected)
-    _assert_close([got], [expected])
-
-
-def _assert_same_verdict(got, expected) -> None:
-    assert (got.status, got.t, got.joints, got.message) == (
-        expected.status,
-        expected.t,
-        expected.joints,
-        expected.message,
-    )
-    _assert_same_event(got.event, expected.event)
-
-
 def _assert_close(got, expected) -> None:
     """Residuals and bounds of two lists of verdicts within TOLERANCE."""
     for name in ("residual", "lower", "upper"):
@@ -111,32 +96,18 @@ def _assert_close(got, expected) -> None:
         )
 
 
-def _assert_same_event(got, expected) -> None:
-    if expected is None:
-        assert got is None
-        return
-    assert (got.start, got.end, got.joints, got.method) == (
-        expected.start,
-        expected.end,
-        expected.joints,
-        expected.method,
-    )
-    assert got.peak == pytest.approx(expected.peak, rel=0.0, abs=TOLERANCE)
-    assert got.peak_residual == pytest.approx(expected.peak_residual, rel=0.0, abs=TOLERANCE)
-
-
 def _run_both(mine, reference, samples):
     """Feed both streams; their verdicts agree. Returns the statuses and the events."""
     statuses, events, got_all, expected_all = [], [], [], []
     for sample in samples:
         expected, got = reference.step(*sample), mine.step(*sample)
-        _assert_same_verdict(got, expected)
+        assert_same_verdict(got, expected)
         got_all.append(got)
         expected_all.append(expected)
         statuses.append(expected.status)
         events += [] if expected.event is None else [expected.event]
     _assert_close(got_all, expected_all)
-    _assert_same_event(mine.finish(), reference.finish())
+    assert_same_event(mine.finish(), reference.finish())
     assert mine.latched == reference.latched
     return statuses, events
 
@@ -197,7 +168,7 @@ def test_measured_velocity_and_joint_torques(panda) -> None:
         sample = (test.t[k], test.q[k], test.tau_m[k])
         got.append(mine.step(*sample, qd=qd[k]))
         expected.append(reference.step(*sample, qd=qd[k]))
-        _assert_same_verdict(got[-1], expected[-1])
+        assert_same_verdict(got[-1], expected[-1])
     _assert_close(got, expected)
     lwr = load_scenario("lwr4-thesis").with_duration(2.0)
     run = lwr.run(seed=2).log
@@ -250,7 +221,7 @@ def test_faults_match_and_change_nothing(panda) -> None:
                 np.testing.assert_array_equal(after[0][committed], before[0][committed])
         expected = clean.step(*sample)
         got = mine.step(*sample)
-        _assert_same_verdict(got, reference.step(*sample))
+        assert_same_verdict(got, reference.step(*sample))
         # The stream goes on as if the faults never came.
         assert (got.status, got.joints, got.event) == (
             expected.status,

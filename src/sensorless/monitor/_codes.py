@@ -6,13 +6,16 @@ low four bits (``OK``, ``COLLISION``, ``SETTLING``, then the faults from
 ``EVENT`` bit when an event closed at the sample, and the joints outside
 their bounds as a bit mask (bit j: joint j + 1). ``UNJUDGED``: the entry of
 the common sample did not judge it and changed nothing; the Python checks
-say why. :func:`refusal` holds what both streams decline. Imports nothing at
-run time, so that the numpy stream runs without numba.
+say why. :func:`joints` and :func:`event_of` read a mask and a closed event
+back; :func:`refusal` holds what both streams decline. Imports no numba, so
+that the numpy stream runs without it.
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
+
+from ..signals import Event
 
 if TYPE_CHECKING:
     from .stream import CollisionMonitor
@@ -37,6 +40,8 @@ __all__ = [
     "SETTLING",
     "STATUSES",
     "UNJUDGED",
+    "event_of",
+    "joints",
     "refusal",
 ]
 
@@ -62,3 +67,14 @@ def refusal(monitor: CollisionMonitor, families: tuple[type, ...], stream: str) 
     if n_dof > MAX_JOINTS:
         return f"the {stream} handles at most {MAX_JOINTS} joints; the robot has {n_dof}"
     return ""
+
+
+def joints(mask: int) -> tuple[int, ...]:
+    """The joints (1-based) of a joints mask (bit j: joint j + 1)."""
+    return tuple(j + 1 for j in range(mask.bit_length()) if mask >> j & 1)
+
+
+def event_of(fields: tuple[float, ...] | list[float], method: str) -> Event:
+    """An event from its (start, end, joints mask, peak, peak residual)."""
+    start, end, mask, peak, peak_residual = fields
+    return Event(start, end, joints(int(mask)), peak, peak_residual, method)

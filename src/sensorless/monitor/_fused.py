@@ -23,7 +23,18 @@ from ..observers._adaptive_kernel import temporaries_size
 from ..signals import Event
 from ..thresholds import ConstantThreshold, Threshold, TimeVariantThreshold, VelocityThreshold
 from . import _compiled as kernel
-from ._codes import EVENT, FAULT, JOINTS_SHIFT, REASONS, SETTLING, STATUSES, UNJUDGED, refusal
+from ._codes import (
+    EVENT,
+    FAULT,
+    JOINTS_SHIFT,
+    REASONS,
+    SETTLING,
+    STATUSES,
+    UNJUDGED,
+    event_of,
+    joints,
+    refusal,
+)
 
 if TYPE_CHECKING:
     from .stream import CollisionMonitor
@@ -101,7 +112,7 @@ class FusedStream:
         )
         self._flags = self._buffers[:flags].reshape(3, kernel.N_FLAGS)
         self._state = self._buffers[flags : flags + rows].reshape(2, -1, n)
-        self._masks = [_joints(mask) for mask in range(1 << n)] if n <= 10 else None
+        self._masks = [joints(mask) for mask in range(1 << n)] if n <= 10 else None
         for function, signatures in (
             (_fused_step, (kernel.SIGNATURE,)),
             (_fused_block, (kernel.BLOCK_SIGNATURE,)),
@@ -174,11 +185,11 @@ class FusedStream:
     def joints(self, code: int) -> tuple[int, ...]:
         """The joints (1-based) outside their bounds, from a return code of the kernel."""
         mask = code >> JOINTS_SHIFT
-        return _joints(mask) if self._masks is None else self._masks[mask]
+        return joints(mask) if self._masks is None else self._masks[mask]
 
     def closed(self, method: str) -> Event:
         """The event that closed at the last sample run (its code has ``EVENT``)."""
-        return _event(self._flags[2, kernel.OPEN_START :].tolist(), method)
+        return event_of(self._flags[2, kernel.OPEN_START :].tolist(), method)
 
     def block(
         self,
@@ -202,7 +213,7 @@ class FusedStream:
         closed = np.zeros((n_samples, 5))
         _fused_block(t, q, qd, tau_m, tau_j, self._model, buffers, series, codes, closed)
         flags = buffers[: 3 * kernel.N_FLAGS].reshape(3, kernel.N_FLAGS)
-        events = [_event(row, method) for row in closed[np.flatnonzero(codes & EVENT)].tolist()]
+        events = [event_of(row, method) for row in closed[np.flatnonzero(codes & EVENT)].tolist()]
         last = self._finish(flags[0], method)
         return codes, series, events if last is None else [*events, last]
 
@@ -252,7 +263,7 @@ class FusedStream:
             flags[kernel.OPEN_END] - flags[kernel.OPEN_START] >= self._model[kernel.MIN_DURATION]
         )
         event = (
-            _event(flags[kernel.OPEN_START :].tolist(), method)
+            event_of(flags[kernel.OPEN_START :].tolist(), method)
             if flags[kernel.OPEN] and lasted
             else None
         )
@@ -284,16 +295,6 @@ def _adapter(monitor: CollisionMonitor, n: int) -> tuple[FloatArray, FloatArray]
         state.updates.astype(np.float64), [float(state.started)],
     )  # fmt: skip
     return parameters, np.concatenate([np.ravel(field) for field in fields])
-
-
-def _event(fields: list[float], method: str) -> Event:
-    """An event from its (start, end, joints mask, peak, peak residual)."""
-    start, end, joints, peak, peak_residual = fields
-    return Event(start, end, _joints(int(joints)), peak, peak_residual, method)
-
-
-def _joints(mask: int) -> tuple[int, ...]:
-    return tuple(j + 1 for j in range(mask.bit_length()) if mask >> j & 1)
 
 
 def _threshold(

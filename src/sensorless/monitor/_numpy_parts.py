@@ -16,7 +16,6 @@ import numpy as np
 
 from .._validation import FloatArray
 from ..friction.static import Coulomb, CoulombViscous, HystereticError, Viscous
-from ..signals import Event
 from ..thresholds import ConstantThreshold, TimeVariantThreshold, VelocityThreshold
 from ._codes import COLLISION, JOINTS_SHIFT, OK
 
@@ -25,8 +24,6 @@ __all__ = [
     "EventRules",
     "Flags",
     "block_views",
-    "event",
-    "joints",
     "layout",
     "observer_matrix",
 ]
@@ -86,21 +83,6 @@ def friction_basis(observer: Any) -> tuple[Any, str, FloatArray]:
     if kind in (Coulomb, Viscous, CoulombViscous, HystereticError):
         return observer._friction, "basis", basis
     return observer._friction, "none" if friction is None else "model", basis
-
-
-def cascade(
-    sections: list[tuple[float, ...]], z: FloatArray, q: FloatArray, z_out: FloatArray,
-    y_out: FloatArray,
-) -> None:  # fmt: skip
-    """The velocity cascade on ``q`` from the section states ``z``, with ``sos_sample``'s
-    arithmetic: the new states into ``z_out`` and the output into ``y_out``."""
-    y = q
-    for k, (b0, b1, b2, _, a1, a2) in enumerate(sections):
-        out = b0 * y + z[2 * k]
-        z_out[2 * k] = b1 * y - a1 * out + z[2 * k + 1]
-        z_out[2 * k + 1] = b2 * y - a2 * out
-        y = out
-    y_out[...] = y
 
 
 class Bounds:
@@ -330,16 +312,6 @@ def block_views(block: FloatArray) -> tuple[FloatArray, ...]:
         block[P1], block[C1], block[G1], block[S1], block[SS1], block[VV1],
         block[S1 : VV1 + 1], block[FA : FC + 1], block[FA], block[: SG + 1], block,
     )  # fmt: skip
-
-
-def event(fields: tuple[float, ...], method: str) -> Event:
-    """An event from its (start, end, joints mask, peak, peak residual)."""
-    start, end, mask, peak, peak_residual = fields
-    return Event(start, end, joints(int(mask)), peak, peak_residual, method)
-
-
-def joints(mask: int) -> tuple[int, ...]:
-    return tuple(j + 1 for j in range(mask.bit_length()) if mask >> j & 1)
 
 
 # Bound once: each module attribute lookup costs as much as a line of arithmetic.

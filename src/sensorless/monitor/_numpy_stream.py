@@ -11,9 +11,8 @@ few of them:
 * all per-joint state lives in two row buffers (n_rows, n_dof), the committed
   one and the scratch one; a sample reads the committed buffer, writes the
   scratch one and commits by swapping the two (a fault swaps nothing);
-* the velocity cascade is one matrix product: its sections are linear in
-  (section states, q), so the new states and the filter output are
-  ``F @ [z, q]`` for a matrix F built once from the sections;
+* the velocity estimate of backward differences is one subtraction; any
+  other filter runs through the estimator's own ``sos_sample``;
 * the value limits of q, τ_m, τ_J and of the velocity estimate are one check
   on a block of rows;
 * p is ``pin.rnea`` of the model without gravity at zero velocity and
@@ -42,6 +41,7 @@ import pinocchio as pin
 
 from .._validation import FloatArray
 from ..detection import TIME_TOLERANCE
+from ..filters._sos import sections, sos_sample
 from ..friction.static import Coulomb, CoulombViscous, HystereticError, Viscous
 from ..signals import Event
 from ..thresholds import ConstantThreshold, TimeVariantThreshold, VelocityThreshold
@@ -64,6 +64,8 @@ from ._codes import (
     SETTLING,
     STATUSES,
     UNJUDGED,
+    event_of,
+    joints,
     refusal,
 )
 from ._numpy_parts import (
@@ -91,13 +93,10 @@ from ._numpy_parts import (
     R,
     V,
     block_views,
-    cascade,
     friction_basis,
-    joints,
     layout,
     observer_matrix,
 )  # fmt: skip
-from ._numpy_parts import event as make_event
 
 if TYPE_CHECKING:
     from .stream import CollisionMonitor
@@ -136,7 +135,7 @@ class NumpyStream:
         self._n = n
         estimator = monitor.estimator
         sos = np.asarray(estimator.sos_velocity, dtype=np.float64)
-        self._sections = [tuple(float(c) for c in section) for section in sos]
+        self._sections = sections(sos)
         self._zi = np.asarray(estimator._zi_unit[1], dtype=np.float64).reshape(-1, 1)
         self._backward = sos.tolist() == [[1.0, -1.0, 0.0, 1.0, 0.0, 0.0]]
         self._scale = np.full(n, float(estimator._scale[1]))  # arrays divide faster than floats
@@ -235,7 +234,10 @@ class NumpyStream:
         if self._backward:  # backward differences: y = q − q_prev
             _subtract(q, q if restart else committed[2], out=s_v)
         else:
-            cascade(self._sections, self._zi * q if restart else committed[0], q, scratch[0], s_v)
+            z = self._zi * q if restart else committed[0]  # rows: the sections' two states each
+            y, z_next = sos_sample(self._sections, q, z.reshape(-1, 2, q.shape[0]))
+            scratch[0][...] = z_next.reshape(z.shape)
+            s_v[...] = y
         _divide(s_v, self._scale, out=s_v)
         if qd.shape[0]:
             s_v[...] = qd  # the measured velocity replaces the estimate
@@ -406,7 +408,7 @@ class NumpyStream:
         status = code & 15
         if status >= FAULT:
             return REASONS[status - FAULT], (), None
-        event = make_event(self._closed, method) if code & EVENT else None
+        event = event_of(self._closed, method) if code & EVENT else None
         mask = code >> JOINTS_SHIFT
         return STATUSES[status], joints(mask) if self._masks is None else self._masks[mask], event
 
@@ -417,7 +419,7 @@ class NumpyStream:
 
     def closed(self, method: str) -> Event:
         """The event that closed at the last sample run (its code has ``EVENT``)."""
-        return make_event(self._closed, method)
+        return event_of(self._closed, method)
 
     def block(
         self,
@@ -454,7 +456,7 @@ class NumpyStream:
                 series[:3, k] = out
                 series[3:, k] = self.threshold_rows()
                 if code & EVENT:
-                    events.append(make_event(self._closed, method))
+                    events.append(event_of(self._closed, method))
             last = self.finish(method)
         finally:
             self._restore(saved)
@@ -501,7 +503,7 @@ class NumpyStream:
             return None
         fields = self._rules.lasted(fl)
         fl.open = fl.outside = False
-        return make_event(fields, method) if fields else None
+        return event_of(fields, method) if fields else None
 
 
 # Bound once: each module attribute lookup costs as much as a line of arithmetic.

@@ -325,18 +325,19 @@ class CollisionMonitor:
         if compiled is not None and qd is None:  # the compiled stream's common sample
             function, model, buffers, fused = compiled
             out = _empty((3, self._n_dof))
+            sensed = tau_j if self._joint else tau_m
             try:  # a Python float: numba's dispatcher types a NumPy scalar slowly
-                sensed = tau_j if self._joint else tau_m
-                code = function(float(t), q, tau_m, sensed, model, buffers, out)
+                time = float(t)
+                code = function(time, q, tau_m, sensed, model, buffers, out)
             except Exception:  # a type its signatures refuse: the checks below say why
                 code = UNJUDGED
             status = code & 15
             if status < FAULT:
                 joints = () if code < _JOINTS_CODE else fused.joints(code)
                 event = fused.closed(self._method) if code & EVENT else None
-                return Verdict._of_rows(_STATUSES[status], float(t), joints, out, event)
+                return Verdict._of_rows(_STATUSES[status], time, joints, out, event)
             if status != UNJUDGED:
-                time, reason = float(t), fused.reason(status)
+                reason = fused.reason(status)
                 sample = cast("tuple[FloatArray, ...]", (q, _EMPTY, tau_m, sensed))
                 return self._fault(time, self._fused_fault(fused, reason, time, sample))
         try:

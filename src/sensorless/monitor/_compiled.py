@@ -52,7 +52,6 @@ from ..robots._recursion_numba import terms_at
 from ._codes import (
     COLLISION,
     EVENT,
-    FAULT,
     FAULT_BOUNDS,
     FAULT_EARLY,
     FAULT_GAP,
@@ -69,12 +68,15 @@ from ._codes import (
 )
 
 __all__ = [
-    "BLOCK_SIGNATURE",
     "SAMPLE_SIGNATURES",
     "SIGNATURE",
-    "fused_block",
+    "bound",
+    "cascade",
+    "detect",
     "fused_step",
     "fused_step_sample",
+    "step",
+    "views_of",
 ]
 
 
@@ -111,11 +113,6 @@ SAMPLE_SIGNATURES = tuple(
 )
 """Arguments of :func:`fused_step_sample`: writable samples and read-only ones (rows of a
 ``Log``), each an exact match for numba's dispatcher (a conversion costs it 0.2 µs a call)."""
-BLOCK_SIGNATURE = types.void(
-    _READ, _READ2, _READ2, _READ2, _READ2, _READ, _WRITE,
-    types.Array(types.float64, 3, "C"), types.Array(types.int64, 1, "C"), _WRITE2,
-)  # fmt: skip
-"""Arguments of :func:`fused_block`."""
 
 
 @njit(cache=True)
@@ -124,7 +121,7 @@ def _copy(source: Any, target: Any) -> None:
 
     numba's slice assignment goes through its broadcasting code: three times
     the cost of these loops on the stream's small rows (0.33 against 0.11 µs
-    per sample for the four copies of :func:`_step`).
+    per sample for the four copies of :func:`step`).
     """
     flat_source, flat_target = source.reshape(-1), target.reshape(-1)
     for i in range(flat_source.shape[0]):
@@ -151,6 +148,22 @@ def _bin(model: FloatArray, v: float) -> int:
         else:
             high = middle
     return min(max(low - 1, 0), n_edges - 2)
+
+
+@njit(cache=True, inline="always")
+def cascade(model: FloatArray, y: float, z: Any, first: int, j: int) -> float:
+    """The velocity sections on ``y`` = q_j [rad] (state rows ``z[first:]``, column j, updated).
+
+    Returns the cascade's output, the velocity estimate times dt [rad].
+    """
+    for k in range(int(model[N_SECTIONS])):
+        b = HEADER + 6 * k
+        z0, z1 = z[first + 2 * k, j], z[first + 2 * k + 1, j]
+        out = model[b] * y + z0
+        z[first + 2 * k, j] = model[b + 1] * y - model[b + 4] * out + z1
+        z[first + 2 * k + 1, j] = model[b + 2] * y - model[b + 5] * out
+        y = out
+    return y
 
 
 @njit(cache=True)
@@ -210,14 +223,7 @@ def _observe(
     n = q.shape[0]
     dt = model[DT]
     for j in range(n):
-        y = q[j]
-        for k in range(int(model[N_SECTIONS])):
-            b = HEADER + 6 * k
-            z0, z1 = s[SECTIONS + 2 * k, j], s[SECTIONS + 2 * k + 1, j]
-            out = model[b] * y + z0
-            s[SECTIONS + 2 * k, j] = model[b + 1] * y - model[b + 4] * out + z1
-            s[SECTIONS + 2 * k + 1, j] = model[b + 2] * y - model[b + 5] * out
-            y = out
+        y = cascade(model, q[j], s, SECTIONS, j)
         s[VELOCITY, j] = qd[j] if qd.shape[0] == n else y / dt
     for j in range(n):
         if not abs(s[VELOCITY, j]) <= const[j, SPEED_LIMIT]:
@@ -252,39 +258,55 @@ def _observe(
     return True
 
 
+@njit(cache=True, inline="always")
+def bound(
+    const: FloatArray, table: FloatArray, model: FloatArray, j: int,
+    signals: tuple[float, float, float, float], bins: Any, start: bool,
+) -> tuple[float, float]:  # fmt: skip
+    """Lower and upper bound of joint j [N m].
+
+    ``signals`` are joint j's filtered model torque h [N m], velocity [rad/s],
+    filtered friction [N m] and filtered sign; ``bins[j]`` is the velocity-bin
+    filter's state, updated.
+    """
+    family = int(model[FAMILY])
+    h, v, filtered_friction, filtered_sign = signals
+    if family == CONSTANT:
+        upper = const[j, WIDTH]
+        lower = -upper
+    elif family == VELOCITY_BINS:
+        k = _bin(model, v)
+        if start:  # the filter starts with this sample's bin held since forever
+            bins[j] = table[0, k, j]
+        friction = bins[j]
+        bins[j] = const[j, BIN_WEIGHT] * table[0, k, j] + const[j, BIN_POLE] * friction
+        centre = const[j, GAMMA] * h + friction
+        lower = table[1, k, j] + centre
+        upper = table[2, k, j] + centre
+        if model[EXTRA] > 0.0 and (v < const[j, VISITED_LOW] or v >= const[j, VISITED_HIGH]):
+            lower = lower - model[EXTRA]
+            upper = upper + model[EXTRA]
+    else:
+        if family == TIME_VARIANT:
+            centre = const[j, GAMMA] * h + const[j, COEFFICIENT] * filtered_friction
+        else:
+            centre = const[j, GAMMA] * h - const[j, COEFFICIENT] * filtered_sign
+        lower = centre - const[j, WIDTH]
+        upper = centre + const[j, WIDTH]
+    if const[j, MONITORED] == 0.0:
+        lower, upper = -np.inf, np.inf
+    return lower, upper
+
+
 @njit(cache=True)
 def _bounds(
     const: FloatArray, table: FloatArray, model: FloatArray, s: Any, start: bool, out: Any
 ) -> bool:
     """Bounds of the threshold into out[1], out[2]; False if one is NaN."""
-    family = int(model[FAMILY])
+    bins = s[BIN_STATE]
     for j in range(s.shape[1]):
-        h = s[MODEL_TORQUE, j]
-        if family == CONSTANT:
-            upper = const[j, WIDTH]
-            lower = -upper
-        elif family == VELOCITY_BINS:
-            v = s[VELOCITY, j]
-            k = _bin(model, v)
-            if start:  # the filter starts with this sample's bin held since forever
-                s[BIN_STATE, j] = table[0, k, j]
-            friction = s[BIN_STATE, j]
-            s[BIN_STATE, j] = const[j, BIN_WEIGHT] * table[0, k, j] + const[j, BIN_POLE] * friction
-            centre = const[j, GAMMA] * h + friction
-            lower = table[1, k, j] + centre
-            upper = table[2, k, j] + centre
-            if model[EXTRA] > 0.0 and (v < const[j, VISITED_LOW] or v >= const[j, VISITED_HIGH]):
-                lower = lower - model[EXTRA]
-                upper = upper + model[EXTRA]
-        else:
-            if family == TIME_VARIANT:
-                centre = const[j, GAMMA] * h + const[j, COEFFICIENT] * s[FILTERED_FRICTION, j]
-            else:
-                centre = const[j, GAMMA] * h - const[j, COEFFICIENT] * s[FILTERED_SIGN, j]
-            lower = centre - const[j, WIDTH]
-            upper = centre + const[j, WIDTH]
-        if const[j, MONITORED] == 0.0:
-            lower, upper = -np.inf, np.inf
+        signals = (s[MODEL_TORQUE, j], s[VELOCITY, j], s[FILTERED_FRICTION, j], s[FILTERED_SIGN, j])
+        lower, upper = bound(const, table, model, j, signals, bins, start)
         if math.isnan(lower) or math.isnan(upper):
             return False
         out[1, j], out[2, j] = lower, upper
@@ -292,7 +314,7 @@ def _bounds(
 
 
 @njit(cache=True)
-def _detect(
+def detect(
     time: float, const: FloatArray, model: FloatArray, out: Any, new: Any, event: Any
 ) -> int:
     """``Detector._step_checked`` and the latch on the flags ``new``: status | joints mask."""
@@ -403,7 +425,7 @@ def _adapt(model: FloatArray, region: Any, rows: Any, trusted: bool, out: Any) -
 
 
 @njit(cache=True)
-def _views(model: FloatArray, buffers: FloatArray, n: int) -> Any:
+def views_of(model: FloatArray, buffers: FloatArray, n: int) -> Any:
     """``const``, ``table``, ``flags``, ``state``, ``work``, ``adapter``: views of the two arrays.
 
     ``adapter``: the drift adapter's committed state, its scratch state and
@@ -444,7 +466,7 @@ def fused_step(
     the estimate. ``out`` (3, n_dof) receives the residual and the bounds
     [N m] (NaN bounds while settling).
     """
-    return _step(time, (q, qd, tau_m, tau_j), model, _views(model, buffers, q.shape[0]), out)
+    return step(time, (q, qd, tau_m, tau_j), model, views_of(model, buffers, q.shape[0]), out)
 
 
 @njit(cache=True)
@@ -470,11 +492,11 @@ def fused_step_sample(
     n = out.shape[1]
     if q.shape[0] != n or tau_m.shape[0] != n or tau_j.shape[0] != n or not math.isfinite(time):
         return UNJUDGED
-    return _step(time, (q, q[:0], tau_m, tau_j), model, _views(model, buffers, n), out)
+    return step(time, (q, q[:0], tau_m, tau_j), model, views_of(model, buffers, n), out)
 
 
 @njit(cache=True)
-def _step(time: float, sample: Any, model: FloatArray, views: Any, out: FloatArray) -> int:
+def step(time: float, sample: Any, model: FloatArray, views: Any, out: FloatArray) -> int:
     """:func:`fused_step` on the ``views`` of its two flat arrays."""
     q, qd, tau_m, tau_j = sample
     const, table, flags, state, work, adapter = views
@@ -543,7 +565,7 @@ def _step(time: float, sample: Any, model: FloatArray, views: Any, out: FloatArr
         if not _bounds(const, table, model, rows, start, out):
             old[PENDING] = time
             return FAULT_BOUNDS
-        code = _detect(time, const, model, out, new, event)
+        code = detect(time, const, model, out, new, event)
     if code >> JOINTS_SHIFT != 0 or code & 15 == COLLISION:
         new[QUIET_FROM] = time + model[GUARD]
     new[T_LAST], new[FLOOR], new[PENDING] = time, time, -np.inf
@@ -551,48 +573,3 @@ def _step(time: float, sample: Any, model: FloatArray, views: Any, out: FloatArr
     _copy(rows, state[0])
     _copy(adapter[1], adapter[0])
     return code | (EVENT if event[OPEN] != 0.0 else 0)
-
-
-@njit(cache=True)
-def fused_block(
-    t: FloatArray,
-    q: FloatArray,
-    qd: FloatArray,
-    tau_m: FloatArray,
-    tau_j: FloatArray,
-    model: FloatArray,
-    buffers: FloatArray,
-    series: FloatArray,
-    codes: Any,
-    events: FloatArray,
-) -> None:
-    """:func:`fused_step` over the rows of a block: the batch monitor is the stream.
-
-    ``t`` (n_samples,) [s]; ``q``, ``tau_m``, ``tau_j`` (n_samples, n_dof);
-    ``qd`` (n_samples, n_dof) measured [rad/s] or (n_samples, 0). Per sample,
-    ``codes`` receives the return code, ``series`` (7, n_samples, n_dof) the
-    residual, lower and upper bounds, and the observer's filtered model
-    torque, friction, sign and velocity (NaN left at faults but the velocity
-    of a ``FAULT_VELOCITY``), and ``events``
-    (n_samples, 5) the event closed there (start, end, joints mask, peak,
-    peak residual) when the code has ``EVENT``.
-    """
-    n = q.shape[1]
-    views = _views(model, buffers, n)
-    flags, state = views[2], views[3]
-    out = np.empty((3, n))
-    for k in range(t.shape[0]):
-        code = _step(t[k], (q[k], qd[k], tau_m[k], tau_j[k]), model, views, out)
-        codes[k] = code
-        if code == FAULT_VELOCITY:  # the estimate its message names
-            series[6, k] = state[1, VELOCITY]
-        if code & 15 >= FAULT:
-            continue
-        for j in range(n):  # loops: numba's slice assignment costs more than the step's copies
-            series[0, k, j], series[1, k, j], series[2, k, j] = out[0, j], out[1, j], out[2, j]
-            series[3, k, j] = state[0, MODEL_TORQUE, j]
-            series[4, k, j] = state[0, FILTERED_FRICTION, j]
-            series[5, k, j] = state[0, FILTERED_SIGN, j]
-            series[6, k, j] = state[0, VELOCITY, j]
-        if code & EVENT:
-            events[k] = flags[2, OPEN_START:N_FLAGS]

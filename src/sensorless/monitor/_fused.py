@@ -35,6 +35,7 @@ from ._codes import (
     joints,
     refusal,
 )
+from ._compiled_block import BLOCK_SIGNATURE, CHUNK, fused_block
 
 if TYPE_CHECKING:
     from .stream import CollisionMonitor
@@ -43,7 +44,7 @@ __all__ = ["FusedStream", "unsupported"]
 
 _FAMILIES = (ConstantThreshold, TimeVariantThreshold, VelocityThreshold)
 # Bound once: each attribute lookup on the module costs as much as a line of arithmetic.
-_fused_step, _fused_block = kernel.fused_step, kernel.fused_block
+_fused_step, _fused_block = kernel.fused_step, fused_block
 _fused_step_sample = kernel.fused_step_sample
 _THRESHOLD_ROWS = [kernel.MODEL_TORQUE, kernel.FILTERED_FRICTION, kernel.FILTERED_SIGN,
                    kernel.VELOCITY]  # fmt: skip
@@ -115,7 +116,7 @@ class FusedStream:
         self._masks = [joints(mask) for mask in range(1 << n)] if n <= 10 else None
         for function, signatures in (
             (_fused_step, (kernel.SIGNATURE,)),
-            (_fused_block, (kernel.BLOCK_SIGNATURE,)),
+            (_fused_block, (BLOCK_SIGNATURE,)),
             (_fused_step_sample, kernel.SAMPLE_SIGNATURES),
         ):
             for signature in signatures:
@@ -196,11 +197,14 @@ class FusedStream:
         t: FloatArray,
         sample: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
         method: str,
+        chunk: int = CHUNK,
     ) -> tuple[np.ndarray, FloatArray, list[Event]]:
-        """A whole log as a fresh stream, by :func:`~sensorless.monitor._compiled.fused_block`.
+        """A whole log as a fresh stream, by :func:`._compiled_block.fused_block`.
 
         ``t`` (n_samples,) [s]; ``sample`` is (q, qd, tau_m, tau_j), each
-        (n_samples, n_dof), ``qd`` (n_samples, 0) without a measured velocity.
+        (n_samples, n_dof), ``qd`` (n_samples, 0) without a measured velocity;
+        ``chunk``: the longest run of plain samples done by phases (0: every
+        sample by the per-sample kernel, the same results).
         The live stream's state is left alone. Returns the codes per sample,
         the series (7, n_samples, n_dof) of :func:`fused_block` (NaN at faults)
         and the events, the one still open at the end included.
@@ -211,7 +215,7 @@ class FusedStream:
         series = np.full((7, n_samples, n), np.nan)
         codes = np.zeros(n_samples, dtype=np.int64)
         closed = np.zeros((n_samples, 5))
-        _fused_block(t, q, qd, tau_m, tau_j, self._model, buffers, series, codes, closed)
+        _fused_block(t, q, qd, tau_m, tau_j, self._model, buffers, series, codes, closed, chunk)
         flags = buffers[: 3 * kernel.N_FLAGS].reshape(3, kernel.N_FLAGS)
         events = [event_of(row, method) for row in closed[np.flatnonzero(codes & EVENT)].tolist()]
         last = self._finish(flags[0], method)

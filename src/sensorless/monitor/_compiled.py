@@ -261,13 +261,13 @@ def _observe(
 @njit(cache=True, inline="always")
 def bound(
     const: FloatArray, table: FloatArray, model: FloatArray, j: int,
-    signals: tuple[float, float, float, float], bins: Any, start: bool,
-) -> tuple[float, float]:  # fmt: skip
-    """Lower and upper bound of joint j [N m].
+    signals: tuple[float, float, float, float], held: float, start: bool,
+) -> tuple[float, float, float]:  # fmt: skip
+    """Lower and upper bound of joint j [N m], and the velocity-bin filter's new state.
 
     ``signals`` are joint j's filtered model torque h [N m], velocity [rad/s],
-    filtered friction [N m] and filtered sign; ``bins[j]`` is the velocity-bin
-    filter's state, updated.
+    filtered friction [N m] and filtered sign; ``held`` is the velocity-bin
+    filter's state [N m] (returned as it is by the other families).
     """
     family = int(model[FAMILY])
     h, v, filtered_friction, filtered_sign = signals
@@ -276,10 +276,8 @@ def bound(
         lower = -upper
     elif family == VELOCITY_BINS:
         k = _bin(model, v)
-        if start:  # the filter starts with this sample's bin held since forever
-            bins[j] = table[0, k, j]
-        friction = bins[j]
-        bins[j] = const[j, BIN_WEIGHT] * table[0, k, j] + const[j, BIN_POLE] * friction
+        friction = table[0, k, j] if start else held  # start: this bin held since forever
+        held = const[j, BIN_WEIGHT] * table[0, k, j] + const[j, BIN_POLE] * friction
         centre = const[j, GAMMA] * h + friction
         lower = table[1, k, j] + centre
         upper = table[2, k, j] + centre
@@ -295,7 +293,7 @@ def bound(
         upper = centre + const[j, WIDTH]
     if const[j, MONITORED] == 0.0:
         lower, upper = -np.inf, np.inf
-    return lower, upper
+    return lower, upper, held
 
 
 @njit(cache=True)
@@ -303,25 +301,28 @@ def _bounds(
     const: FloatArray, table: FloatArray, model: FloatArray, s: Any, start: bool, out: Any
 ) -> bool:
     """Bounds of the threshold into out[1], out[2]; False if one is NaN."""
-    bins = s[BIN_STATE]
     for j in range(s.shape[1]):
         signals = (s[MODEL_TORQUE, j], s[VELOCITY, j], s[FILTERED_FRICTION, j], s[FILTERED_SIGN, j])
-        lower, upper = bound(const, table, model, j, signals, bins, start)
+        lower, upper, held = bound(const, table, model, j, signals, s[BIN_STATE, j], start)
+        s[BIN_STATE, j] = held
         if math.isnan(lower) or math.isnan(upper):
             return False
         out[1, j], out[2, j] = lower, upper
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def detect(
-    time: float, const: FloatArray, model: FloatArray, out: Any, new: Any, event: Any
+    time: float, const: FloatArray, model: FloatArray, rows: Any, k: int, new: Any, event: Any
 ) -> int:
-    """``Detector._step_checked`` and the latch on the flags ``new``: status | joints mask."""
+    """``Detector._step_checked`` and the latch on the flags ``new``: status | joints mask.
+
+    ``rows[:, k]`` (3, n_dof) are the residual, lower and upper bound [N m] of the sample.
+    """
     mask, best, worst = 0, -1, 0.0
-    for j in range(out.shape[1]):
+    for j in range(rows.shape[2]):
         if const[j, MONITORED] != 0.0:
-            excursion = max(out[0, j] - out[2, j], out[1, j] - out[0, j])
+            excursion = max(rows[0, k, j] - rows[2, k, j], rows[1, k, j] - rows[0, k, j])
             if excursion > 0.0:
                 mask |= 1 << j
             if best < 0 or excursion > worst:
@@ -331,11 +332,15 @@ def detect(
             new[OPEN_END] = time
             new[OPEN_JOINTS] = float(int(new[OPEN_JOINTS]) | mask)
             if not worst <= new[OPEN_PEAK]:
-                new[OPEN_PEAK], new[OPEN_PEAK_RESIDUAL] = worst, out[0, best]
+                new[OPEN_PEAK], new[OPEN_PEAK_RESIDUAL] = worst, rows[0, k, best]
         else:
             _close(new, model[MIN_DURATION], event)
             new[OPEN], new[OPEN_START], new[OPEN_END] = 1.0, time, time
-            new[OPEN_JOINTS], new[OPEN_PEAK], new[OPEN_PEAK_RESIDUAL] = mask, worst, out[0, best]
+            new[OPEN_JOINTS], new[OPEN_PEAK], new[OPEN_PEAK_RESIDUAL] = (
+                mask,
+                worst,
+                rows[0, k, best],
+            )
     elif new[OPEN] != 0.0 and time - new[OPEN_END] >= model[HOLD]:
         _close(new, model[MIN_DURATION], event)
         new[OPEN] = 0.0
@@ -565,7 +570,7 @@ def step(time: float, sample: Any, model: FloatArray, views: Any, out: FloatArra
         if not _bounds(const, table, model, rows, start, out):
             old[PENDING] = time
             return FAULT_BOUNDS
-        code = detect(time, const, model, out, new, event)
+        code = detect(time, const, model, out.reshape((3, 1, n)), 0, new, event)
     if code >> JOINTS_SHIFT != 0 or code & 15 == COLLISION:
         new[QUIET_FROM] = time + model[GUARD]
     new[T_LAST], new[FLOOR], new[PENDING] = time, time, -np.inf

@@ -128,6 +128,7 @@ def fused_block(
     flags, state = views[2], views[3]
     out = np.empty((3, n))
     terms = np.empty((3, max(chunk, 1), n))
+    held = np.empty((max(chunk, 1), n))
     sections = np.empty((2 * int(model[N_SECTIONS]), n))
     phased = chunk > 0 and model[ADAPT_AT] == 0.0
     k = 0
@@ -136,7 +137,7 @@ def fused_block(
         if phased and old[HAS_STREAM] != 0.0 and old[T_LAST] != old[START]:
             done = _plain_run(
                 k, (t, q, qd, tau_m, tau_j), model, views, (series, codes, events),
-                (terms, sections, out),
+                (terms, sections, held),
             )  # fmt: skip
             if done:
                 k += done
@@ -164,13 +165,13 @@ def _plain_run(k0: int, log: Any, model: FloatArray, views: Any, results: Any, s
 
     ``log`` is (t, q, qd, tau_m, tau_j), ``results`` (series, codes, events)
     of :func:`fused_block`, ``scratch`` (terms (3, chunk, n), section states
-    (2 n_sections, n), out (3, n)). The committed state is that after the
-    last sample done; 0 done changes nothing.
+    (2 n_sections, n), velocity-bin filter states (chunk, n)). The committed
+    state is that after the last sample done; 0 done changes nothing.
     """
     t, q, qd, tau_m, tau_j = log
     series = results[0]
-    terms, sections, out = scratch
-    const, _, flags, state, work, _ = views
+    terms, sections, held = scratch
+    const, table, flags, state, work, _ = views
     old, rows = flags[0], state[0]
     n, n_rows = q.shape[1], sections.shape[0]
     plain = _phase_rules(k0, min(k0 + terms.shape[1], t.shape[0]), log, model, const, old)
@@ -185,8 +186,10 @@ def _plain_run(k0: int, log: Any, model: FloatArray, views: Any, results: Any, s
     for i in range(stop - k0):
         terms_at(i, run_q, run_velocity, const, work, terms)
     tau = tau_j if model[JOINT] != 0.0 else tau_m
-    stop = _phase_observer(k0, stop, tau, model, const, rows, terms, series)
-    stop = _phase_detector(k0, stop, t, model, views, results, out)
+    stop = _phase_observer(
+        k0, stop, (t, tau), model, (const, table), (old, rows), terms, series, held
+    )
+    stop = _phase_detector(k0, stop, t, model, const, old, flags[2], results)
     valid = stop - k0
     if valid == 0:
         _forget(k0, reach, series)
@@ -204,6 +207,7 @@ def _plain_run(k0: int, log: Any, model: FloatArray, views: Any, results: Any, s
         rows[SIGN, j], rows[TORQUE, j] = sign(v), tau[last, j]
         rows[RESIDUAL, j], rows[MODEL_TORQUE, j] = series[0, last, j], series[3, last, j]
         rows[FILTERED_FRICTION, j], rows[FILTERED_SIGN, j] = series[4, last, j], series[5, last, j]
+        rows[BIN_STATE, j] = held[valid - 1, j]
     if stop == plain:  # phase 1 ended there
         for row in range(n_rows):
             for j in range(n):
@@ -266,16 +270,22 @@ def _phase_velocity(
 
 @njit(cache=True)
 def _phase_observer(
-    k0: int, stop: int, tau: FloatArray, model: FloatArray, const: FloatArray, rows: Any,
-    terms: Any, series: Any,
+    k0: int, stop: int, log: Any, model: FloatArray, parameters: Any, state: Any, terms: Any,
+    series: Any, held: Any,
 ) -> int:  # fmt: skip
-    """Phase 3: ``MomentumObserver._step_checked`` of [k0, stop), joint by joint.
+    """Phase 3: ``MomentumObserver._step_checked`` and the bounds of [k0, stop), joint by joint.
 
-    The residual and the filtered model torque, friction and sign go to
-    ``series`` (rows 0, 3, 4, 5); returns the first sample with a non-finite
-    one (``stop`` if none). The committed ``rows`` are read, not written.
+    ``log`` is (t, τ), ``parameters`` (const, table), ``state`` the committed
+    (flags, rows), read and not written. The residual, the filtered model
+    torque, friction and sign and the bounds go to ``series`` (rows 0, 3, 4,
+    5 and 1, 2; NaN bounds while settling), the velocity-bin filter's state
+    after each sample to ``held``. Returns the first sample with a non-finite
+    observer output or a NaN bound (``stop`` if none).
     """
-    dt = model[DT]
+    t, tau = log
+    const, table = parameters
+    old, rows = state
+    dt, settle = model[DT], old[START] + 0.0
     kind = int(model[FRICTION])
     velocity = series[6]
     for j in range(rows.shape[1]):
@@ -283,6 +293,7 @@ def _phase_observer(
         fr0, s0, tau0 = rows[FRICTION_TORQUE, j], rows[SIGN, j], rows[TORQUE, j]
         r, h_f = rows[RESIDUAL, j], rows[MODEL_TORQUE, j]
         f_f, s_f = rows[FILTERED_FRICTION, j], rows[FILTERED_SIGN, j]
+        bin_state, judged = rows[BIN_STATE, j], old[HAS_DETECTOR] != 0.0
         a, w = const[j, POLE], const[j, WEIGHT]
         for k in range(k0, stop):
             i = k - k0
@@ -299,55 +310,46 @@ def _phase_observer(
             f_f = w * f + a * f_f
             s_f = w * g + a * s_f
             series[0, k, j], series[3, k, j], series[4, k, j], series[5, k, j] = r, h_f, f_f, s_f
-            if not (math.isfinite(r) and math.isfinite(h_f)):
+            finite = math.isfinite(r) and math.isfinite(h_f)
+            if not (finite and math.isfinite(f_f) and math.isfinite(s_f)):
                 stop = k
                 break
-            if not (math.isfinite(f_f) and math.isfinite(s_f)):
-                stop = k
-                break
+            if t[k] - settle < model[SETTLE]:
+                lower = upper = np.nan
+            else:
+                signals = (h_f, v, f_f, s_f)
+                lower, upper, bin_state = bound(
+                    const, table, model, j, signals, bin_state, not judged
+                )
+                judged = True
+                if math.isnan(lower) or math.isnan(upper):
+                    stop = k
+                    break
+            series[1, k, j], series[2, k, j], held[i, j] = lower, upper, bin_state
             p0, vg0, fr0, s0, tau0 = p1, vg1, fr1, s1, tau[k, j]
     return stop
 
 
 @njit(cache=True)
 def _phase_detector(
-    k0: int, stop: int, t: FloatArray, model: FloatArray, views: Any, results: Any, out: Any
-) -> int:
-    """Phase 4: settling, bounds, detector and latch of [k0, stop), sample by sample.
+    k0: int, stop: int, t: FloatArray, model: FloatArray, const: FloatArray, old: Any,
+    event: Any, results: Any,
+) -> int:  # fmt: skip
+    """Phase 4: detector and latch of [k0, stop), sample by sample, on the committed flags.
 
-    Writes the bounds (``series`` rows 1, 2), the codes and the closed events,
-    and updates the committed flags and velocity-bin state; returns the first
-    sample with a NaN bound (``stop`` if none), whose state is left as before it.
+    Writes the codes and the closed events (``event``: the kernel's row of
+    the event closed at a sample).
     """
-    const, table, flags, state, _, _ = views
     series, codes, events = results
-    old, event, rows = flags[0], flags[2], state[0]
-    n = rows.shape[1]
-    held = np.empty(n)
     for k in range(k0, stop):
         time = t[k]
         event[OPEN] = 0.0
         if time - old[START] < model[SETTLE]:
-            for j in range(n):
-                series[1, k, j], series[2, k, j] = np.nan, np.nan
             code = SETTLING
         else:
-            start = old[HAS_DETECTOR] == 0.0
-            for j in range(n):
-                held[j] = rows[BIN_STATE, j]
-            for j in range(n):
-                signals = (series[3, k, j], series[6, k, j], series[4, k, j], series[5, k, j])
-                lower, upper = bound(const, table, model, j, signals, held, start)
-                if math.isnan(lower) or math.isnan(upper):
-                    return k
-                out[0, j], out[1, j], out[2, j] = series[0, k, j], lower, upper
-            for j in range(n):
-                rows[BIN_STATE, j] = held[j]
-            if start:
+            if old[HAS_DETECTOR] == 0.0:
                 old[HAS_DETECTOR], old[OUTSIDE], old[OPEN] = 1.0, 0.0, 0.0
-            code = detect(time, const, model, out, old, event)
-            for j in range(n):
-                series[1, k, j], series[2, k, j] = out[1, j], out[2, j]
+            code = detect(time, const, model, series, k, old, event)
         if code >> JOINTS_SHIFT != 0 or code & 15 == COLLISION:
             old[QUIET_FROM] = time + model[GUARD]
         old[T_LAST], old[FLOOR], old[PENDING] = time, time, -np.inf

@@ -23,7 +23,8 @@ at the flange as :func:`sensorless.robots.load` builds them), this script
    loop, ``MomentumTerms.terms_one`` (numba) in a Python loop, the fused
    stream step ``CollisionMonitor.step`` (numba, time-variant threshold),
    ``MomentumTerms.terms`` (numba) over the whole array and the fused batch
-   ``CollisionMonitor.run`` (numba), and prints one table.
+   ``CollisionMonitor.run`` (numba; by phases, and every sample through the
+   stream step's kernel), and prints one table.
 
 Every figure is a loop over all samples divided by their number [µs per
 sample], one thread: the median over ``--rounds`` rounds, each of which runs
@@ -308,7 +309,13 @@ def python_loops(
     loops[STEP] = step_loop
     loops["numba: MomentumTerms.terms, whole array"] = lambda: terms.terms(q, qd)
     log = Log(t, q, tau_m=tau_free)
-    loops["numba: CollisionMonitor.run (fused batch)"] = lambda: monitor.run(log)
+    loops["numba: CollisionMonitor.run (fused batch, by phases)"] = lambda: monitor.run(log)
+    columns = (t, (q, np.empty((n, 0)), tau_free, tau_free))
+    fused = monitor._fused
+    assert fused is not None
+    loops["numba: the same batch, every sample by the step's kernel"] = lambda: fused.block(
+        *columns, "batch", 0
+    )
     return loops
 
 

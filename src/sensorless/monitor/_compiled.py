@@ -20,7 +20,8 @@ the gap rule's memory). Joints travel as bit masks (bit j: joint j + 1).
 Units SI and radians.
 
 Two flat float64 arrays per stream (packed by :class:`~sensorless.monitor._fused.FusedStream`),
-sliced into views by the kernel, since each array argument costs about 0.1 µs per call:
+sliced into views by the kernel, since each array argument costs about 0.1 µs per call
+(the positions named below are in :mod:`._layout`):
 
 ``model`` (read-only)
     The header (``DT`` … ``GUARD``); the velocity sections (n_sections × 6)
@@ -47,7 +48,6 @@ from numba import njit, types
 
 from .._validation import FloatArray
 from ..friction._static_kernel import sign, static_torque
-from ..observers._adaptive_kernel import compiled_rows as adapter_rows
 from ..robots._recursion_numba import terms_at
 from ._codes import (
     COLLISION,
@@ -66,6 +66,21 @@ from ._codes import (
     SETTLING,
     UNJUDGED,
 )
+from ._compiled_adapter import adapt, adapter_restart
+
+# isort: off
+from ._layout import (
+    ADAPT_AT, ADAPT_SIZE, ADAPT_STATE, BIN_POLE, BIN_STATE, BIN_WEIGHT, CENTRE, COEFFICIENT,
+    CONST_AT, CONSTANT, COR_GRAVITY, DT, EARLY, EXTRA, FAMILY, FILTERED_FRICTION,
+    FILTERED_SIGN, FLOOR, FRICTION, FRICTION_PARAMETERS, FRICTION_TORQUE, GAMMA, GAP, GUARD,
+    HALF_RANGE, HAS_DETECTOR, HAS_STREAM, HEADER, HOLD, INSIDE_SINCE, JOINT, LATCHED,
+    MIN_DURATION, MODEL_TORQUE, MOMENTUM, MONITORED, N_CONST, N_EDGES, N_FLAGS, N_SECTIONS,
+    OPEN, OPEN_END, OPEN_JOINTS, OPEN_PEAK, OPEN_PEAK_RESIDUAL, OPEN_START, OUTSIDE, PENDING,
+    POLE, QUIET_FROM, RELEASE, RESIDUAL, SECTIONS, SETTLE, SIGN, SPEED_LIMIT, START, T_LAST,
+    TABLE_AT, TERMS, TIME_VARIANT, TORQUE, TORQUE_LIMIT, VELOCITY, VELOCITY_BINS, VISITED_HIGH,
+    VISITED_LOW, WEIGHT, WIDTH,
+)  # fmt: skip
+# isort: on
 
 __all__ = [
     "SAMPLE_SIGNATURES",
@@ -75,32 +90,11 @@ __all__ = [
     "detect",
     "fused_step",
     "fused_step_sample",
+    "observer_update",
     "step",
     "views_of",
 ]
 
-
-# model header
-DT, EARLY, GAP, SETTLE, RELEASE, MIN_DURATION, HOLD, JOINT = range(8)
-FRICTION, FAMILY, EXTRA, N_SECTIONS, N_EDGES, CONST_AT, TABLE_AT = range(8, 15)
-ADAPT_AT, ADAPT_STATE, ADAPT_SIZE, GUARD = range(15, 19)  # drift adaptation; ADAPT_AT 0: none
-HEADER = 19
-# const columns after the recursion's 28; FRICTION_PARAMETERS has five
-CENTRE, HALF_RANGE, SPEED_LIMIT, TORQUE_LIMIT, POLE, WEIGHT, FRICTION_PARAMETERS = range(28, 35)
-MONITORED, WIDTH, GAMMA, COEFFICIENT, BIN_POLE, BIN_WEIGHT = range(39, 45)
-VISITED_LOW, VISITED_HIGH, N_CONST = 45, 46, 47
-# state rows: the ObserverState fields, the threshold's filter state, q̂̇, p/Cᵀq̇/g, sections
-MOMENTUM, COR_GRAVITY, FRICTION_TORQUE, SIGN, TORQUE = range(5)
-RESIDUAL, MODEL_TORQUE, FILTERED_FRICTION, FILTERED_SIGN = range(5, 9)
-BIN_STATE, VELOCITY, TERMS, SECTIONS = 9, 10, 11, 14
-# flags; row 2 holds a closed event in the OPEN... fields
-HAS_STREAM, START, T_LAST, FLOOR, PENDING, LATCHED, INSIDE_SINCE, HAS_DETECTOR = range(8)
-QUIET_FROM = 8  # the drift adapter may learn from this time on [s]
-OUTSIDE, OPEN, OPEN_START, OPEN_END, OPEN_JOINTS, OPEN_PEAK, OPEN_PEAK_RESIDUAL = range(9, 16)
-N_FLAGS = 16
-# threshold families (friction kinds: sensorless.friction._kinds)
-CONSTANT, TIME_VARIANT, HYSTERETIC_FORM, VELOCITY_BINS = range(4)
-# codes: status (low 4 bits; faults from FAULT on), EVENT bit, joints mask from JOINTS_SHIFT on
 
 _READ = types.Array(types.float64, 1, "C", readonly=True)
 _READ2 = types.Array(types.float64, 2, "C", readonly=True)
@@ -202,6 +196,30 @@ def _restart(
             s[SECTIONS + row, j] = model[zi_at + row] * q[j]
 
 
+@njit(cache=True, inline="always")
+def observer_update(
+    last: tuple[float, float, float, float, float], new: tuple[float, float, float, float],
+    filtered: tuple[float, float, float, float], pole: float, weight: float, dt: float,
+) -> tuple[float, float, float, float]:  # fmt: skip
+    """The four first-order filters of ``MomentumObserver._step_checked`` for one joint.
+
+    ``last`` is (p [N m s], Cᵀq̇ − g, τ̂_fr [N m], sign, τ [N m]) of the last
+    sample, ``new`` the first four of this one, ``filtered`` the filters'
+    states (r̂, h, τ̂_fr, sign): returns them updated.
+    """
+    p0, vg0, fr0, s0, tau0 = last
+    p1, vg1, fr1, s1 = new
+    r, h_f, f_f, s_f = filtered
+    h = (p1 - p0) / dt - 0.5 * (vg0 + vg1)
+    f = (fr0 + fr1) * 0.5
+    g = (s0 + s1) * 0.5
+    e = (h + f) - tau0
+    return (
+        weight * e + pole * r, weight * h + pole * h_f, weight * f + pole * f_f,
+        weight * g + pole * s_f,
+    )  # fmt: skip
+
+
 @njit(cache=True)
 def _observe(
     q: FloatArray,
@@ -240,15 +258,11 @@ def _observe(
             s[SIGN, j], s[TORQUE, j] = s1, fr1 - vg1
             s[RESIDUAL, j], s[MODEL_TORQUE, j] = 0.0, -vg1
             s[FILTERED_FRICTION, j], s[FILTERED_SIGN, j] = fr1, s1
-        h = (p1 - s[MOMENTUM, j]) / dt - 0.5 * (s[COR_GRAVITY, j] + vg1)
-        f = (s[FRICTION_TORQUE, j] + fr1) * 0.5
-        g = (s[SIGN, j] + s1) * 0.5
-        r = (h + f) - s[TORQUE, j]
+        last = (s[MOMENTUM, j], s[COR_GRAVITY, j], s[FRICTION_TORQUE, j], s[SIGN, j], s[TORQUE, j])
+        filtered = (s[RESIDUAL, j], s[RESIDUAL + 1, j], s[RESIDUAL + 2, j], s[RESIDUAL + 3, j])
         a, w = const[j, POLE], const[j, WEIGHT]
-        s[RESIDUAL, j] = w * r + a * s[RESIDUAL, j]
-        s[MODEL_TORQUE, j] = w * h + a * s[MODEL_TORQUE, j]
-        s[FILTERED_FRICTION, j] = w * f + a * s[FILTERED_FRICTION, j]
-        s[FILTERED_SIGN, j] = w * g + a * s[FILTERED_SIGN, j]
+        filtered = observer_update(last, (p1, vg1, fr1, s1), filtered, a, w, dt)
+        s[RESIDUAL, j], s[MODEL_TORQUE, j], s[FILTERED_FRICTION, j], s[FILTERED_SIGN, j] = filtered
         s[MOMENTUM, j], s[COR_GRAVITY, j], s[FRICTION_TORQUE, j] = p1, vg1, fr1
         s[SIGN, j], s[TORQUE, j] = s1, tau[j]
     for row in range(RESIDUAL, RESIDUAL + 4):
@@ -358,75 +372,6 @@ def detect(
             new[LATCHED], new[INSIDE_SINCE] = 0.0, np.nan
     status = COLLISION if new[LATCHED] != 0.0 else OK
     return status | mask << JOINTS_SHIFT
-
-
-@njit(cache=True)
-def _adapter_parts(model: FloatArray, region: FloatArray, n: int) -> Any:
-    """The drift adapter's parameters (read from ``model``) and state (views of ``region``).
-
-    At ``model[ADAPT_AT]``: λ, max_trace and the number of columns m (the
-    ``scalars`` of the adapter), then pole, weight, v_s, max_correction and
-    rate·dt (n each), the norm weights and the box (n × m each). ``region``
-    (one copy of the state): θ and the RLS estimate (n × m each), P
-    (n × m × m), φ (n × 3), ψ (n × m), δτ, F(δτ), the update counts (n each)
-    and the started flag. These are the arguments of
-    :func:`sensorless.observers._adaptive_kernel.advance_block`.
-    """
-    at = int(model[ADAPT_AT])
-    m = int(model[at + 2])
-    scalars = model[at : at + 3]
-    p = at + 3
-    pole, weight, v_s = model[p : p + n], model[p + n : p + 2 * n], model[p + 2 * n : p + 3 * n]
-    max_corr, step_bound = model[p + 3 * n : p + 4 * n], model[p + 4 * n : p + 5 * n]
-    p += 5 * n
-    norm_w = model[p : p + n * m].reshape((n, m))
-    box = model[p + n * m : p + 2 * n * m].reshape((n, m))
-    theta = region[: n * m].reshape((n, m))
-    estimate = region[n * m : 2 * n * m].reshape((n, m))
-    r = 2 * n * m
-    cov = region[r : r + n * m * m].reshape((n, m, m))
-    r += n * m * m
-    reg = region[r : r + 3 * n].reshape((n, 3))
-    freg = region[r + 3 * n : r + (3 + m) * n].reshape((n, m))
-    r += (3 + m) * n
-    corr, fcorr = region[r : r + n], region[r + n : r + 2 * n]
-    updates, started = region[r + 2 * n : r + 3 * n], region[r + 3 * n : r + 3 * n + 1]
-    state = (theta, estimate, cov, reg, freg, corr, fcorr)
-    params = (pole, weight, v_s, max_corr, norm_w, box, step_bound)
-    return state, started, updates, params, scalars
-
-
-@njit(cache=True)
-def _adapter_restart(model: FloatArray, region: FloatArray, n: int) -> None:
-    """``FrictionAdapter.restart`` in place: φ, ψ, δτ, F(δτ) and the started flag to zero."""
-    if model[ADAPT_AT] == 0.0:
-        return
-    state, started, _, _, _ = _adapter_parts(model, region, n)
-    _, _, _, reg, freg, corr, fcorr = state
-    _copy(np.zeros(reg.shape), reg)
-    _copy(np.zeros(freg.shape), freg)
-    corr[:] = 0.0
-    fcorr[:] = 0.0
-    started[0] = 0.0
-
-
-@njit(cache=True)
-def _adapt(model: FloatArray, region: Any, rows: Any, trusted: bool, out: Any) -> None:
-    """The drift adapter on this sample: the corrected residual into ``out[0]``.
-
-    ``FrictionAdapter._step_checked`` on the observer's r̂, the velocity
-    and the filtered model torque h of ``rows``, learning only if ``trusted``;
-    ``region`` is (the scratch copy of the adapter's state, the temporaries
-    of ``advance_rows``).
-    """
-    n = rows.shape[1]
-    state, started, updates, params, scalars = _adapter_parts(model, region[0], n)
-    trust = np.full((1, n), trusted)
-    adapter_rows(
-        rows[RESIDUAL : RESIDUAL + 1], rows[VELOCITY : VELOCITY + 1],
-        rows[MODEL_TORQUE : MODEL_TORQUE + 1], trust, state, started, updates, params,
-        scalars, out[0:1], region[1],
-    )  # fmt: skip
 
 
 @njit(cache=True)
@@ -547,7 +492,7 @@ def step(time: float, sample: Any, model: FloatArray, views: Any, out: FloatArra
         _copy(state[0], rows)
     fresh = not restart and old[T_LAST] == old[START]
     if restart or fresh:  # the adapter's filters start with the observer; what it learned stays
-        _adapter_restart(model, adapter[1], n)
+        adapter_restart(model, adapter[1], n)
     if not _observe(q, qd, tau_j if joint else tau_m, const, model, rows, work, fresh):
         old[PENDING] = time
         for j in range(n):
@@ -557,7 +502,7 @@ def step(time: float, sample: Any, model: FloatArray, views: Any, out: FloatArra
     settling = time - new[START] < model[SETTLE]
     if model[ADAPT_AT] > 0.0:
         trusted = not settling and old[LATCHED] == 0.0 and time >= new[QUIET_FROM]
-        _adapt(model, adapter[1:], rows, trusted, out)
+        adapt(model, adapter[1:], rows, trusted, out)
     else:
         _copy(rows[RESIDUAL], out[0])
     if settling:

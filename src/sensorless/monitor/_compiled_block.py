@@ -34,7 +34,8 @@ from .._validation import FloatArray
 from ..friction._static_kernel import sign, static_torque
 from ..robots._recursion_numba import terms_at
 from ._codes import COLLISION, EVENT, FAULT, FAULT_VELOCITY, JOINTS_SHIFT, SETTLING
-from ._compiled import (
+from ._compiled import bound, cascade, detect, observer_update, step, views_of
+from ._layout import (
     ADAPT_AT,
     BIN_STATE,
     CENTRE,
@@ -75,11 +76,6 @@ from ._compiled import (
     TORQUE_LIMIT,
     VELOCITY,
     WEIGHT,
-    bound,
-    cascade,
-    detect,
-    step,
-    views_of,
 )
 
 __all__ = ["BLOCK_SIGNATURE", "CHUNK", "fused_block"]
@@ -301,14 +297,10 @@ def _phase_observer(
             p1, vg1 = terms[0, i, j], terms[1, i, j] - terms[2, i, j]
             fr1 = static_torque(kind, const, j, FRICTION_PARAMETERS, v)
             s1 = sign(v)
-            h = (p1 - p0) / dt - 0.5 * (vg0 + vg1)
-            f = (fr0 + fr1) * 0.5
-            g = (s0 + s1) * 0.5
-            e = (h + f) - tau0
-            r = w * e + a * r
-            h_f = w * h + a * h_f
-            f_f = w * f + a * f_f
-            s_f = w * g + a * s_f
+            last = (p0, vg0, fr0, s0, tau0)
+            r, h_f, f_f, s_f = observer_update(
+                last, (p1, vg1, fr1, s1), (r, h_f, f_f, s_f), a, w, dt
+            )
             series[0, k, j], series[3, k, j], series[4, k, j], series[5, k, j] = r, h_f, f_f, s_f
             finite = math.isfinite(r) and math.isfinite(h_f)
             if not (finite and math.isfinite(f_f) and math.isfinite(s_f)):

@@ -23,6 +23,7 @@ from ..observers._adaptive_kernel import temporaries_size
 from ..signals import Event
 from ..thresholds import ConstantThreshold, Threshold, TimeVariantThreshold, VelocityThreshold
 from . import _compiled as kernel
+from . import _layout as layout
 from ._codes import (
     EVENT,
     FAULT,
@@ -46,8 +47,8 @@ _FAMILIES = (ConstantThreshold, TimeVariantThreshold, VelocityThreshold)
 # Bound once: each attribute lookup on the module costs as much as a line of arithmetic.
 _fused_step, _fused_block = kernel.fused_step, fused_block
 _fused_step_sample = kernel.fused_step_sample
-_THRESHOLD_ROWS = [kernel.MODEL_TORQUE, kernel.FILTERED_FRICTION, kernel.FILTERED_SIGN,
-                   kernel.VELOCITY]  # fmt: skip
+_THRESHOLD_ROWS = [layout.MODEL_TORQUE, layout.FILTERED_FRICTION, layout.FILTERED_SIGN,
+                   layout.VELOCITY]  # fmt: skip
 
 
 def unsupported(monitor: CollisionMonitor) -> str:
@@ -84,16 +85,16 @@ class FusedStream:
         family, const, table, edges, extra = _threshold(monitor.threshold, dt, n)
         limits = monitor.limits
         const[:, :28] = observer._kernel.kernel_constants
-        const[:, kernel.CENTRE], const[:, kernel.HALF_RANGE] = limits.centre, limits.half_range
-        const[:, kernel.SPEED_LIMIT], const[:, kernel.TORQUE_LIMIT] = limits.velocity, limits.torque
-        const[:, kernel.POLE], const[:, kernel.WEIGHT] = observer._pole, observer._weight
-        const[:, kernel.FRICTION_PARAMETERS : kernel.MONITORED] = parameters
-        const[np.asarray(detector.monitored_joints) - 1, kernel.MONITORED] = 1.0
+        const[:, layout.CENTRE], const[:, layout.HALF_RANGE] = limits.centre, limits.half_range
+        const[:, layout.SPEED_LIMIT], const[:, layout.TORQUE_LIMIT] = limits.velocity, limits.torque
+        const[:, layout.POLE], const[:, layout.WEIGHT] = observer._pole, observer._weight
+        const[:, layout.FRICTION_PARAMETERS : layout.MONITORED] = parameters
+        const[np.asarray(detector.monitored_joints) - 1, layout.MONITORED] = 1.0
         release = math.nan if policy.release is None else policy.release - TIME_TOLERANCE
-        const_at = kernel.HEADER + 8 * sos.shape[0] + edges.size
+        const_at = layout.HEADER + 8 * sos.shape[0] + edges.size
         table_at = const_at + const.size
         adapter, self._adapter_start = _adapter(monitor, n)
-        flags, rows = 3 * kernel.N_FLAGS, 2 * (kernel.SECTIONS + 2 * sos.shape[0]) * n
+        flags, rows = 3 * layout.N_FLAGS, 2 * (layout.SECTIONS + 2 * sos.shape[0]) * n
         adapter_state = flags + rows + 23 * n
         header = [
             # durations compared up to the Detector's tolerance on time differences
@@ -111,7 +112,7 @@ class FusedStream:
         self._buffers = self._fresh(
             np.zeros(adapter_state + 2 * self._adapter_start.size + temporaries)
         )
-        self._flags = self._buffers[:flags].reshape(3, kernel.N_FLAGS)
+        self._flags = self._buffers[:flags].reshape(3, layout.N_FLAGS)
         self._state = self._buffers[flags : flags + rows].reshape(2, -1, n)
         self._masks = [joints(mask) for mask in range(1 << n)] if n <= 10 else None
         for function, signatures in (
@@ -150,13 +151,13 @@ class FusedStream:
 
     def _fresh(self, buffers: FloatArray) -> FloatArray:
         """``buffers`` as a stream that saw no sample (no time floor, nothing latched)."""
-        flags = buffers[: kernel.N_FLAGS]
+        flags = buffers[: layout.N_FLAGS]
         flags[:] = 0.0
-        flags[[kernel.FLOOR, kernel.PENDING]] = -np.inf
-        flags[kernel.INSIDE_SINCE] = np.nan
+        flags[[layout.FLOOR, layout.PENDING]] = -np.inf
+        flags[layout.INSIDE_SINCE] = np.nan
         size = self._adapter_start.size
         if size:
-            start = int(self._model[kernel.ADAPT_STATE])
+            start = int(self._model[layout.ADAPT_STATE])
             buffers[start : start + 2 * size].reshape(2, size)[:] = self._adapter_start
         return buffers
 
@@ -190,7 +191,7 @@ class FusedStream:
 
     def closed(self, method: str) -> Event:
         """The event that closed at the last sample run (its code has ``EVENT``)."""
-        return event_of(self._flags[2, kernel.OPEN_START :].tolist(), method)
+        return event_of(self._flags[2, layout.OPEN_START :].tolist(), method)
 
     def block(
         self,
@@ -216,7 +217,7 @@ class FusedStream:
         codes = np.zeros(n_samples, dtype=np.int64)
         closed = np.zeros((n_samples, 5))
         _fused_block(t, q, qd, tau_m, tau_j, self._model, buffers, series, codes, closed, chunk)
-        flags = buffers[: 3 * kernel.N_FLAGS].reshape(3, kernel.N_FLAGS)
+        flags = buffers[: 3 * layout.N_FLAGS].reshape(3, layout.N_FLAGS)
         events = [event_of(row, method) for row in closed[np.flatnonzero(codes & EVENT)].tolist()]
         last = self._finish(flags[0], method)
         return codes, series, events if last is None else [*events, last]
@@ -229,22 +230,22 @@ class FusedStream:
     @property
     def floor(self) -> float:
         """No sample may come at or before this time [s]."""
-        return float(self._flags[0, kernel.FLOOR])
+        return float(self._flags[0, layout.FLOOR])
 
     @property
     def last(self) -> float:
         """Time of the last accepted sample [s]."""
-        return float(self._flags[0, kernel.T_LAST])
+        return float(self._flags[0, layout.T_LAST])
 
     @property
     def latched(self) -> bool:
         """Whether a collision is latched."""
-        return bool(self._flags[0, kernel.LATCHED])
+        return bool(self._flags[0, layout.LATCHED])
 
     @property
     def velocity(self) -> FloatArray:
         """The velocity estimate of the last sample run, accepted or not [rad/s]."""
-        return self._state[1, kernel.VELOCITY].copy()
+        return self._state[1, layout.VELOCITY].copy()
 
     def threshold_rows(self) -> FloatArray:
         """The observer's model torque, filtered friction and sign [N m, N m, -] and the
@@ -254,24 +255,24 @@ class FusedStream:
 
     def refuse(self, time: float) -> None:
         """Record a sample refused before :meth:`run` (the gap rule's pending time)."""
-        self._flags[0, kernel.PENDING] = time
+        self._flags[0, layout.PENDING] = time
 
     def finish(self, method: str) -> Event | None:
         """Close the open event at the end of the stream, as ``Detector.finish``."""
         return self._finish(self._flags[0], method)
 
     def _finish(self, flags: FloatArray, method: str) -> Event | None:
-        if not (flags[kernel.HAS_STREAM] and flags[kernel.HAS_DETECTOR]):
+        if not (flags[layout.HAS_STREAM] and flags[layout.HAS_DETECTOR]):
             return None
         lasted = (
-            flags[kernel.OPEN_END] - flags[kernel.OPEN_START] >= self._model[kernel.MIN_DURATION]
+            flags[layout.OPEN_END] - flags[layout.OPEN_START] >= self._model[layout.MIN_DURATION]
         )
         event = (
-            event_of(flags[kernel.OPEN_START :].tolist(), method)
-            if flags[kernel.OPEN] and lasted
+            event_of(flags[layout.OPEN_START :].tolist(), method)
+            if flags[layout.OPEN] and lasted
             else None
         )
-        flags[kernel.OPEN] = flags[kernel.OUTSIDE] = 0.0
+        flags[layout.OPEN] = flags[layout.OUTSIDE] = 0.0
         return event
 
 
@@ -305,24 +306,24 @@ def _threshold(
     threshold: Threshold, dt: float, n: int
 ) -> tuple[int, FloatArray, FloatArray, FloatArray, float]:
     """Family, per-joint constants, bin table (3, n_bins, n), bin edges, extrapolation margin."""
-    const = np.zeros((n, kernel.N_CONST))
+    const = np.zeros((n, layout.N_CONST))
     if isinstance(threshold, ConstantThreshold):
-        const[:, kernel.WIDTH] = threshold.beta_
-        return kernel.CONSTANT, const, np.zeros((3, 1, n)), np.zeros(0), 0.0
+        const[:, layout.WIDTH] = threshold.beta_
+        return layout.CONSTANT, const, np.zeros((3, 1, n)), np.zeros(0), 0.0
     if isinstance(threshold, TimeVariantThreshold):
         hysteretic = threshold.form == "hysteretic"
-        const[:, kernel.WIDTH], const[:, kernel.GAMMA] = threshold.alpha_, threshold.gamma_
-        const[:, kernel.COEFFICIENT] = threshold.c_ if hysteretic else threshold.eps_fr_
-        family = kernel.HYSTERETIC_FORM if hysteretic else kernel.TIME_VARIANT
+        const[:, layout.WIDTH], const[:, layout.GAMMA] = threshold.alpha_, threshold.gamma_
+        const[:, layout.COEFFICIENT] = threshold.c_ if hysteretic else threshold.eps_fr_
+        family = layout.HYSTERETIC_FORM if hysteretic else layout.TIME_VARIANT
         return family, const, np.zeros((3, 1, n)), np.zeros(0), 0.0
     assert isinstance(threshold, VelocityThreshold)  # unsupported() admits these three
     edges = np.asarray(threshold.bin_edges_, dtype=np.float64)
     step = np.broadcast_to(threshold.gain_, (n,)) * dt  # the filter of first_order
-    const[:, kernel.GAMMA] = threshold.gamma_
-    const[:, kernel.BIN_POLE], const[:, kernel.BIN_WEIGHT] = np.exp(-step), -np.expm1(-step)
+    const[:, layout.GAMMA] = threshold.gamma_
+    const[:, layout.BIN_POLE], const[:, layout.BIN_WEIGHT] = np.exp(-step), -np.expm1(-step)
     visited = threshold.counts_ > 0
     first = np.argmax(visited, axis=0)
     last = visited.shape[0] - 1 - np.argmax(visited[::-1], axis=0)
-    const[:, kernel.VISITED_LOW], const[:, kernel.VISITED_HIGH] = edges[first], edges[last + 1]
+    const[:, layout.VISITED_LOW], const[:, layout.VISITED_HIGH] = edges[first], edges[last + 1]
     table = np.stack([threshold.tau_fme_, threshold.lower_, threshold.upper_])
-    return kernel.VELOCITY_BINS, const, table, edges, float(threshold.extrapolation_margin)
+    return layout.VELOCITY_BINS, const, table, edges, float(threshold.extrapolation_margin)

@@ -111,15 +111,27 @@ SAMPLE_SIGNATURES = tuple(
 
 @njit(cache=True)
 def _copy(source: Any, target: Any) -> None:
-    """``target[...] = source`` for arrays of one shape, 1-D or 2-D, as plain loops.
+    """``target[:] = source`` for 1-D arrays of one size, as a plain loop.
 
-    numba's slice assignment goes through its broadcasting code: three times
-    the cost of these loops on the stream's small rows (0.33 against 0.11 µs
-    per sample for the four copies of :func:`step`).
+    numba's slice assignment goes through its broadcasting code, about three
+    times the cost of this loop on the stream's small rows.
     """
-    flat_source, flat_target = source.reshape(-1), target.reshape(-1)
-    for i in range(flat_source.shape[0]):
-        flat_target[i] = flat_source[i]
+    for i in range(source.shape[0]):
+        target[i] = source[i]
+
+
+@njit(cache=True)
+def _copy_state(flags: Any, state: Any, source: int, target: int) -> None:
+    """Flags and state rows ``source`` to ``target`` (0 committed, 1 scratch), by index.
+
+    Indexing the arrays themselves, not views of their rows: each view costs
+    numba a reference count and about 25 ns.
+    """
+    for i in range(flags.shape[1]):
+        flags[target, i] = flags[source, i]
+    for row in range(state.shape[1]):
+        for j in range(state.shape[2]):
+            state[target, row, j] = state[source, row, j]
 
 
 @njit(cache=True)
@@ -479,8 +491,10 @@ def step(time: float, sample: Any, model: FloatArray, views: Any, out: FloatArra
                 old[PENDING] = time
                 return FAULT_GAP
     new, event, rows = flags[1], flags[2], state[1]
-    _copy(old, new)
-    _copy(adapter[0], adapter[1])
+    _copy_state(flags, state, 0, 1)  # scratch = committed; a restart rewrites the rows it uses
+    adapting = model[ADAPT_AT] > 0.0
+    if adapting:
+        _copy(adapter[0], adapter[1])
     event[OPEN] = 0.0
     if restart:
         if old[HAS_STREAM] != 0.0 and old[HAS_DETECTOR] != 0.0:
@@ -488,8 +502,6 @@ def step(time: float, sample: Any, model: FloatArray, views: Any, out: FloatArra
         _restart(q, qd, const, model, rows, work)
         new[HAS_STREAM], new[START], new[HAS_DETECTOR] = 1.0, time, 0.0
         new[QUIET_FROM] = -np.inf
-    else:
-        _copy(state[0], rows)
     fresh = not restart and old[T_LAST] == old[START]
     if restart or fresh:  # the adapter's filters start with the observer; what it learned stays
         adapter_restart(model, adapter[1], n)
@@ -500,13 +512,15 @@ def step(time: float, sample: Any, model: FloatArray, views: Any, out: FloatArra
                 return FAULT_VELOCITY
         return FAULT_OBSERVER
     settling = time - new[START] < model[SETTLE]
-    if model[ADAPT_AT] > 0.0:
+    if adapting:
         trusted = not settling and old[LATCHED] == 0.0 and time >= new[QUIET_FROM]
         adapt(model, adapter[1:], rows, trusted, out)
     else:
-        _copy(rows[RESIDUAL], out[0])
+        for j in range(n):
+            out[0, j] = rows[RESIDUAL, j]
     if settling:
-        out[1:] = np.nan
+        for j in range(n):
+            out[1, j], out[2, j] = np.nan, np.nan
         code = SETTLING
     else:
         start = new[HAS_DETECTOR] == 0.0
@@ -519,7 +533,7 @@ def step(time: float, sample: Any, model: FloatArray, views: Any, out: FloatArra
     if code >> JOINTS_SHIFT != 0 or code & 15 == COLLISION:
         new[QUIET_FROM] = time + model[GUARD]
     new[T_LAST], new[FLOOR], new[PENDING] = time, time, -np.inf
-    _copy(new, old)
-    _copy(rows, state[0])
-    _copy(adapter[1], adapter[0])
+    _copy_state(flags, state, 1, 0)
+    if adapting:
+        _copy(adapter[1], adapter[0])
     return code | (EVENT if event[OPEN] != 0.0 else 0)

@@ -194,13 +194,8 @@ def _run_fused(
     status = codes & 15
     bad = status >= fused.FAULT
     settling = status == fused.SETTLING
-    out = dict(
-        zip(
-            ("residual", "model_torque", "friction", "sign", "velocity"),
-            series[[0, 3, 4, 5, 6]],
-            strict=True,
-        )
-    )
+    names = ("residual", "model_torque", "friction", "sign", "velocity")
+    out = {name: series[row] for name, row in zip(names, (0, 3, 4, 5, 6), strict=True)}
 
     def reason(k: int) -> str:
         return _fused_reason(

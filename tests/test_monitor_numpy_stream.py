@@ -322,7 +322,8 @@ def test_block_equals_step_by_step(panda) -> None:
 
 @pytest.mark.parametrize("scenario", ["panda-gaz", "puma560-thesis"])
 def test_terms_equal_pinocchio(scenario) -> None:
-    """p = M q̇ (crba, upper triangle mirrored), Cᵀq̇ and g of the stream's rows, on random states."""
+    """p + g (p = M q̇, crba with the upper triangle mirrored), Cᵀq̇ and g of the stream's rows,
+    and p as the difference of the first and third rows, on random states."""
     robot = load_scenario(scenario).robots()[1]
     model = robot.pinocchio_model
     free = [load_scenario(scenario).with_duration(0.6).run(seed=1, collisions=False).log]
@@ -340,14 +341,17 @@ def test_terms_equal_pinocchio(scenario) -> None:
         p = mass @ qd
         coriolis = pin.computeCoriolisMatrix(model, data, q, qd).T @ qd
         gravity = pin.computeGeneralizedGravity(model, data, q)
-        for got, expected in ((rows[0], p), (rows[1], coriolis), (rows[2], gravity)):
+        for got, expected in (
+            (rows[0], p + gravity), (rows[0] - rows[2], p), (rows[1], coriolis), (rows[2], gravity)
+        ):  # fmt: skip
             np.testing.assert_allclose(
                 got, expected, rtol=1e-10, atol=1e-10 * np.abs(expected).max()
             )
         p_r, c_r, g_r = recursion.terms(q[None], qd[None])
         np.testing.assert_allclose(
-            rows[:3], np.stack([p_r[0], c_r[0], g_r[0]]), rtol=1e-10, atol=1e-9
-        )
+            [rows[0] - rows[2], rows[1], rows[2]], np.stack([p_r[0], c_r[0], g_r[0]]),
+            rtol=1e-10, atol=1e-9,
+        )  # fmt: skip
 
 
 def _fields(flags) -> list[Any]:
@@ -440,7 +444,8 @@ def _garbage(draw: Any, last: float, q: np.ndarray, tau: np.ndarray) -> tuple[An
 
 def test_sample_entry_point(panda) -> None:
     """``sample`` (the compiled stream's entry of the common sample): the codes of ``_step``
-    for float64 samples of the right shape and a finite time; UNJUDGED, nothing changed, else."""
+    for float64 samples of the right shape and a finite time, unpickled ones included;
+    UNJUDGED, nothing changed, else."""
     test, nominal, tuned = panda
     entry = _numpy_monitor(nominal, tuned["time-variant"])._fused
     reference = _numpy_monitor(nominal, tuned["time-variant"])._fused
@@ -454,7 +459,10 @@ def test_sample_entry_point(panda) -> None:
                 before = entry._save()
                 assert function(*bad, bad[2], model, buffers, out) == NumpyStream.UNJUDGED
                 np.testing.assert_equal(_fields(entry._save()[2]), _fields(before[2]))
+        if k % 2:  # an unpickled array's dtype equals float64 without being the same object
+            q, tau = pickle.loads(pickle.dumps(q)), pickle.loads(pickle.dumps(tau))
         code = function(t, q, tau, tau, model, buffers, out)
+        assert code != NumpyStream.UNJUDGED
         assert code == reference._step(t, q, np.empty(0), tau, tau, expected_out)
         np.testing.assert_array_equal(out, expected_out)
 

@@ -29,7 +29,8 @@ __all__ = [
 ]
 
 # Rows of the observer block (one block per buffer, and one for a (re)start): this sample's
-# p, Cᵀq̇, g, sign, sign², q̇ and three friction rows whose sum is τ̂_fr (scratch); the state:
+# p + g (one rnea of the model), Cᵀq̇, g, sign, sign², q̇ and three friction rows whose sum is
+# τ̂_fr (scratch); the state:
 # q̇, q, τ_m, τ_J (the rows the limits check), the last sample's p, Cᵀq̇ − g, τ̂_fr and sign,
 # the filters r̂, h, filtered τ̂_fr and filtered sign; a row of ones; the velocity bins' filter.
 P1, C1, G1, S1, SS1, VV1, FA, FB, FC = range(9)
@@ -41,15 +42,17 @@ def observer_matrix(dt: float, weight: float, pole: float, tau: int) -> FloatArr
 
     ``MomentumObserver._step_checked`` as one product: the inputs of the four
     filters (increment of p over dt, trapezoid of Cᵀq̇ − g and τ̂_fr, held τ
-    in the row ``tau``), then y′ = ``weight`` · input + ``pole`` · y.
+    in the row ``tau``), then y′ = ``weight`` · input + ``pole`` · y. The row
+    P1 holds p + g (p = P1 − G1).
     """
     w = np.zeros((SG - P + 1, SG + 1))
     for out, source in ((P, P1), (VG, C1), (SG0, S1)):
         w[out - P, source] = 1.0
-    w[VG - P, G1] = -1.0
+    w[P - P, G1] = w[VG - P, G1] = -1.0
     w[FR - P, [FA, FB, FC]] = 1.0
     h_in = np.zeros(SG + 1)
-    h_in[P1], h_in[P], h_in[C1], h_in[G1], h_in[VG] = 1.0 / dt, -1.0 / dt, -0.5, 0.5, -0.5
+    h_in[P1], h_in[P], h_in[C1], h_in[VG] = 1.0 / dt, -1.0 / dt, -0.5, -0.5
+    h_in[G1] = 0.5 - 1.0 / dt
     f_in = np.zeros(SG + 1)
     f_in[[FA, FB, FC, FR]] = 0.5
     g_in = np.zeros(SG + 1)
@@ -122,10 +125,10 @@ class Bounds:
     def _read_bins(self, threshold: VelocityThreshold, dt: float, monitored: Any) -> None:
         """The bin table by r = searchsorted(edges, q̇, "right") (0 … n_edges), per joint.
 
-        Row r·n_dof + j holds τ_fme, L and U [N m] of joint j's bin clip(r − 1)
-        (``bin_index``), L and U widened by the extrapolation margin where r
-        says q̇ is outside the visited bins (``table_bounds``), and ∓∞ for a
-        joint not monitored.
+        Entry r of joint j's list holds τ_fme, L and U [N m] of its bin clip(r − 1)
+        (``bin_index``), L and U widened by the extrapolation margin where r says
+        q̇ is outside the visited bins (``table_bounds``), and ∓∞ for a joint not
+        monitored.
         """
         n = monitored.size
         edges = np.asarray(threshold.bin_edges_, dtype=np.float64)
@@ -149,24 +152,20 @@ class Bounds:
         # Python floats: for a handful of joints, a loop over lists costs less than the
         # dozen small numpy calls of the same arithmetic (same operations, same order).
         self._edges = edges.tolist()
-        self._table = [table[..., i].reshape(-1).tolist() for i in range(3)]
         step = np.broadcast_to(threshold.gain_, (n,)) * dt  # the filter of first_order
-        self._filter = list(zip(np.exp(-step).tolist(), (-np.expm1(-step)).tolist(), strict=True))
-        self._gamma = np.where(monitored, threshold.gamma_, 0.0).tolist()
+        gamma = np.where(monitored, threshold.gamma_, 0.0).tolist()
+        rows = [[tuple(row) for row in table[:, j].tolist()] for j in range(n)]
+        # per joint: the filter's pole and weight, γ, and (τ_fme, L, U) by r
+        self._joints = list(
+            zip(np.exp(-step).tolist(), (-np.expm1(-step)).tolist(), gamma, rows, strict=True)
+        )
 
-    def __call__(
-        self, s_block: FloatArray, s_rows: FloatArray, c_block: FloatArray, start: bool,
-        out: FloatArray,
-    ) -> list[float]:  # fmt: skip
-        """The residual and bounds into ``out`` [N m]; returns r̂ − U, then L − r̂, per joint.
+    def linear(self, s_block: FloatArray, s_rows: FloatArray, out: FloatArray) -> list[float]:
+        """The constant or time-variant bounds: the residual and bounds into ``out`` [N m];
+        returns r̂ − U, then L − r̂, per joint.
 
-        ``s_block`` and ``c_block`` are the new and the committed observer
-        blocks, ``s_rows`` the rows R … ONE of ``s_block``; ``start``: the
-        first sample after the settling window (velocity bins: the filter of
-        τ_fme starts there).
+        ``s_block`` is the new observer block, ``s_rows`` its rows R … ONE.
         """
-        if self.velocity:
-            return self._bins(s_block, c_block, start, out)
         _multiply(self._gains, s_rows, out=self._scaled)
         rows = self._rows
         _dot(self._sums, self._scaled, out=rows)
@@ -177,33 +176,40 @@ class Bounds:
             out[1:] = rows[:2]
         return self._excursions.tolist()
 
-    def _bins(
-        self, s_block: FloatArray, c_block: FloatArray, start: bool, out: FloatArray
-    ) -> list[float]:
-        """The velocity-bin threshold (``table_bounds``) on the new block, joint by joint.
+    def bins(
+        self, filters: list[float], s_block: FloatArray, c_block: FloatArray, start: bool,
+        out: FloatArray,
+    ) -> list[float]:  # fmt: skip
+        """The velocity-bin threshold (``table_bounds``) on the new block, joint by joint:
+        the residual and bounds into ``out`` [N m]; returns r̂ − U, then L − r̂, per joint.
 
-        The bin is ``bisect_right(edges, q̇)`` (``searchsorted(..., "right")``);
-        the filter of τ_fme starts at ``start``.
+        ``filters`` are the rows R … SG of ``s_block`` as one list, ``c_block`` the
+        committed observer block. The bin is ``bisect_right(edges, q̇)``
+        (``searchsorted(..., "right")``); the filter of τ_fme starts at ``start``
+        (the first sample after the settling window).
         """
-        residual = s_block[R].tolist()
-        velocity, h = s_block[V].tolist(), s_block[H].tolist()
-        last = None if start else c_block[BIN].tolist()
-        n, edges, (fme_of, lower_of, upper_of) = len(residual), self._edges, self._table
+        n, edges = len(self._joints), self._edges
+        residual = filters[:n]
+        last = [None] * n if start else c_block[BIN].tolist()
         filtered, lower, upper, above, below = [], [], [], [], []
-        for j, (pole, weight) in enumerate(self._filter):
-            k = bisect_right(edges, velocity[j]) * n + j
-            fme = fme_of[k]
-            friction = fme if last is None else last[j]
+        for (pole, weight, gamma, rows), v, r, h, friction in zip(
+            self._joints, s_block[V].tolist(), residual, filters[n : 2 * n], last, strict=True
+        ):
+            fme, low, high = rows[_bisect(edges, v)]
+            if friction is None:
+                friction = fme
             filtered.append(weight * fme + pole * friction)
-            centre = self._gamma[j] * h[j] + friction
-            low, high = lower_of[k] + centre, upper_of[k] + centre
+            centre = gamma * h + friction
+            low += centre
+            high += centre
             lower.append(low)
             upper.append(high)
-            above.append(residual[j] - high)  # no product: 0 · ∞ for a joint not monitored
-            below.append(low - residual[j])
+            above.append(r - high)  # no product: 0 · ∞ for a joint not monitored
+            below.append(low - r)
         s_block[BIN] = filtered
         out[...] = (residual, lower, upper)
-        return above + below
+        above += below
+        return above
 
 
 class EventRules:
@@ -315,4 +321,4 @@ def block_views(block: FloatArray) -> tuple[FloatArray, ...]:
 
 
 # Bound once: each module attribute lookup costs as much as a line of arithmetic.
-_multiply, _add, _subtract, _dot = np.multiply, np.add, np.subtract, np.dot
+_multiply, _dot, _bisect = np.multiply, np.dot, bisect_right

@@ -15,9 +15,10 @@ few of them:
   other filter runs through the estimator's own ``sos_sample``;
 * the value limits of q, τ_m, τ_J and of the velocity estimate are one check
   on a block of rows;
-* p is ``pin.rnea`` of the model without gravity at zero velocity and
-  acceleration q̇ (= M q̇, armature included), Cᵀq̇ is q̇ · ``computeCoriolisMatrix``
-  and g ``computeGeneralizedGravity``;
+* p + g is ``pin.rnea`` at zero velocity and acceleration q̇ (M q̇ + g, armature
+  included), Cᵀq̇ is q̇ · ``computeCoriolisMatrix`` and g ``computeGeneralizedGravity``,
+  all on one model and data (a second model's memory costs more than it saves);
+  the observer's product takes p as the difference of the two rows;
 * the observer's update (increments of p, trapezoid of Cᵀq̇ − g and τ̂_fr,
   held τ, the four first-order filters) is one matrix product over the rows
   (this sample's terms, last sample's terms and filter states) when every
@@ -145,8 +146,12 @@ class NumpyStream:
         check = 4 if self._joint else 3  # rows V … TM (… TJ)
         self._centre = np.zeros((check, n))
         self._centre[1] = limits.centre
-        self._limit = np.stack([limits.velocity, limits.half_range, *[limits.torque] * (check - 2)])
-        self._check = (check, check * n, np.empty((check, n)), np.empty((check, n), dtype=bool))
+        limit = np.stack([limits.velocity, limits.half_range, *[limits.torque] * (check - 2)])
+        # [−limit, x − centre, limit]: |x − centre| <= limit is one comparison of the first two
+        # blocks with the last two (exact: negation is), NaN failing both
+        between = np.stack([-limit, np.zeros_like(limit), limit])
+        inside = np.empty((2, check, n), dtype=bool)
+        self._check = (between[1], between[:2], between[1:], 2 * check * n, inside)
         uniform = bool(np.all(observer.gain == observer.gain[0]))
         pole, weight = observer._pole, observer._weight
         self._observe = observer_matrix(
@@ -156,9 +161,6 @@ class NumpyStream:
         self._friction, self._friction_kind, self._basis = friction_basis(observer)
         model = observer.robot.pinocchio_model
         self._model, self._data = model, model.createData()
-        self._weightless = model.copy()
-        self._weightless.gravity = pin.Motion.Zero()
-        self._weightless_data = self._weightless.createData()
         self._zero = np.zeros(n)
         monitored = np.zeros(n, dtype=bool)
         monitored[np.asarray(detector.monitored_joints) - 1] = True
@@ -246,18 +248,18 @@ class NumpyStream:
         s_tau_m[...] = tau_m
         if self._joint:
             s_tau_j[...] = tau_j
-        _, size, difference, inside = self._check
+        difference, low, high, size, inside = self._check
         _subtract(s_check, self._centre, out=difference)
-        _abs(difference, out=difference)
-        _less_equal(difference, self._limit, out=inside)
+        _less_equal(low, high, out=inside)
         if time_fault or _count(inside) != size:
             return self._refuse(time, time_fault)
         fresh = not restart and fl.t_last == fl.start
         views = self._start_views if restart or fresh else committed[11]
         p, coriolis, gravity, sign = views[:4]  # _terms, inline: this runs once per sample
-        p[...] = _rnea(self._weightless, self._weightless_data, q, self._zero, s_v)
-        _dot(s_v, _coriolis(self._model, self._data, q, s_v), out=coriolis)
-        gravity[...] = _gravity(self._model, self._data, q)
+        model, data = self._model, self._data
+        p[...] = _rnea(model, data, q, self._zero, s_v)  # p + g
+        _dot(s_v, _coriolis(model, data, q, s_v), out=coriolis)
+        gravity[...] = _gravity(model, data, q)
         _sign(s_v, out=sign)
         if self._friction_kind != "none":
             self._friction_rows(s_v, views)
@@ -274,15 +276,19 @@ class NumpyStream:
         settling = time - (time if restart else fl.start) < self._settle
         bounds = self._bounds
         if settling or bounds.velocity:  # else a non-finite filter shows in the excursions
-            if not math.isfinite(sum(s_filters.tolist())) and not _finite(s_filters).all():
+            filters = s_filters.tolist()  # r̂, h, filtered τ̂_fr and sign
+            if not math.isfinite(sum(filters)) and not _finite(s_filters).all():
                 fl.pending = time
                 return FAULT_OBSERVER
         if settling:
             out[0] = s_block[R]
             out[1:] = math.nan
         else:
-            start = restart or not fl.has_detector
-            excursions = bounds(s_block, s_rows, committed[10], start, out)
+            if bounds.velocity:
+                start = restart or not fl.has_detector
+                excursions = bounds.bins(filters, s_block, committed[10], start, out)
+            else:
+                excursions = bounds.linear(s_block, s_rows, out)
             total = sum(excursions)  # NaN or +inf: a non-finite filter or bound
             if not total < math.inf:
                 if not _finite(s_filters).all():
@@ -324,22 +330,22 @@ class NumpyStream:
         motor-torque observer); the caller's checks then say why.
         """
         shape = self._shape
-        if not (
-            type(q) is _ndarray and q.dtype is _FLOAT and q.shape == shape and q.strides == _STRIDES
-        ) or not math.isfinite(time):
-            return UNJUDGED
-        for x in (tau_m,) if tau_j is tau_m else (tau_m, tau_j):
+        for x in (q, tau_m) if tau_j is tau_m else (q, tau_m, tau_j):
+            # ``is`` first: an unpickled array's dtype is an equal copy, not the same object
             if not (
-                type(x) is _ndarray and x.dtype is _FLOAT and x.shape == shape
-                and x.strides == _STRIDES
+                type(x) is _ndarray and (x.dtype is _FLOAT or x.dtype == _FLOAT)
+                and x.shape == shape and x.strides == _STRIDES
             ):  # fmt: skip
                 return UNJUDGED
+        if not math.isfinite(time):
+            return UNJUDGED
         return self._step(time, q, _EMPTY, tau_m, tau_j, out)
 
     def _refuse(self, time: float, time_fault: int) -> int:
         """The fault of a sample outside the limits or the time rules, in the kernel's order."""
         fl = self._flags
-        rows = [bool(row.all()) for row in self._check[3]]  # q̇, q, τ_m(, τ_J)
+        inside = self._check[4]  # both comparisons, rows q̇, q, τ_m(, τ_J)
+        rows = [bool(inside[:, row].all()) for row in range(inside.shape[1])]
         for row, code in zip(rows[1:], (FAULT_Q, FAULT_TAU_M, FAULT_TAU_J), strict=False):
             if not row:
                 fl.pending = time
@@ -352,14 +358,15 @@ class NumpyStream:
         return FAULT_VELOCITY
 
     def _terms(self, q: FloatArray, v: FloatArray, views: tuple[FloatArray, ...]) -> None:
-        """p, Cᵀq̇, g, sign and the friction rows at (q, ``v``) into the rows P1 … FC.
+        """p + g, Cᵀq̇, g, sign and the friction rows at (q, ``v``) into the rows P1 … FC.
 
         ``views`` are those of an observer block (:func:`_block_views`).
         """
         p, coriolis, gravity, sign = views[:4]
-        p[...] = _rnea(self._weightless, self._weightless_data, q, self._zero, v)
-        _dot(v, _coriolis(self._model, self._data, q, v), out=coriolis)
-        gravity[...] = _gravity(self._model, self._data, q)
+        model, data = self._model, self._data
+        p[...] = _rnea(model, data, q, self._zero, v)
+        _dot(v, _coriolis(model, data, q, v), out=coriolis)
+        gravity[...] = _gravity(model, data, q)
         _sign(v, out=sign)
         self._friction_rows(v, views)
 
@@ -381,7 +388,7 @@ class NumpyStream:
 
     def _start_rows(self, terms: FloatArray, block: FloatArray) -> None:
         """``MomentumObserver.initial_state`` from the rows P1 … FC of ``terms``, into ``block``."""
-        p, vg, sign = terms[P1].copy(), terms[C1] - terms[G1], terms[S1].copy()
+        p, vg, sign = terms[P1] - terms[G1], terms[C1] - terms[G1], terms[S1].copy()
         friction = terms[FA] + terms[FB] + terms[FC]
         block[P], block[VG], block[FR], block[SG0] = p, vg, friction, sign
         block[self._tau], block[R], block[H] = friction - vg, 0.0, -vg
@@ -507,9 +514,7 @@ class NumpyStream:
 
 
 # Bound once: each module attribute lookup costs as much as a line of arithmetic.
-_subtract, _divide, _abs, _less_equal, _count = (
-    np.subtract, np.divide, np.abs, np.less_equal, np.count_nonzero,
-)  # fmt: skip
+_subtract, _divide, _less_equal, _count = np.subtract, np.divide, np.less_equal, np.count_nonzero
 _multiply, _dot, _sign = np.multiply, np.dot, np.sign
 _finite, _isnan = np.isfinite, np.isnan
 _ndarray, _FLOAT, _STRIDES, _EMPTY = np.ndarray, np.dtype(np.float64), (8,), np.empty(0)

@@ -337,7 +337,7 @@ def _bounds(
     return True
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def detect(
     time: float, const: FloatArray, model: FloatArray, rows: Any, k: int, new: Any, event: Any
 ) -> int:

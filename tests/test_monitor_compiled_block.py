@@ -6,6 +6,8 @@ import copy
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from sensorless.friction import Coulomb
 from sensorless.monitor import CollisionMonitor, ObserverSettings, tune
@@ -150,3 +152,47 @@ def test_the_batch_is_the_live_stream_bit_for_bit(panda, method) -> None:
     last = monitor.finish()
     assert events + ([] if last is None else [last]) == run.events
     assert run.events
+
+
+_KINDS = ("nan_q", "torque", "early", "late", "jump", "speed", "gap", "repeat")
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    disturbances=st.lists(
+        st.tuples(st.sampled_from(_KINDS), st.integers(2, 1499), st.integers(1, 40)), max_size=6
+    ),
+    chunk=st.sampled_from([1, 2, 3, 17, 128, 1000]),
+    method=st.sampled_from(FAMILIES),
+    measured=st.booleans(),
+)
+def test_phases_equal_the_per_sample_kernel_on_any_disturbance(
+    panda, disturbances, chunk, method, measured
+) -> None:
+    """Faults of every kind, anywhere, for any length: the phases give the kernel's bits."""
+    log, nominal, tuned = panda
+    monitor = CollisionMonitor(nominal, *tuned[method], backend="numba")
+    t, (q, qd, tau, _) = _columns(log, measured)
+    t, q, qd, tau = t[:1500], q[:1500], qd[:1500], tau[:1500]
+    keep = np.ones(t.size, dtype=bool)
+    for kind, k, width in disturbances:
+        span = slice(k, min(k + width, t.size))
+        if kind == "nan_q":
+            q[span, 1] = np.nan
+        elif kind == "torque":
+            tau[span, 4] = 1e6
+        elif kind == "early":
+            t[k] = t[k - 1] + 0.3 * log.dt
+        elif kind == "late":  # inside the gap rule: accepted
+            t[k] = t[k - 1] + 1.4 * log.dt
+        elif kind == "jump":
+            q[span, 0] += 0.3
+        elif kind == "speed" and measured:
+            qd[span, 2] = 1e4
+        elif kind == "gap":
+            keep[span] = False
+        elif kind == "repeat":
+            t[k] = t[k - 1]
+    t, sample = t[keep], [c[keep] for c in (q, qd, tau, tau)]
+    got, expected = _both(monitor, t, sample, chunk)
+    _assert_identical(got, expected)

@@ -10,9 +10,11 @@ phases, each a tight loop over the run with the stream's own arithmetic:
 
 1. the velocity cascade, sample by sample, and its limit;
 2. p, Cᵀq̇ and g of the whole run by the O(n) recursion (``terms_at``);
-3. the momentum observer, joint by joint over the run (its four filters
-   are first-order recursions, r_k = a·r_{k−1} + b·u_k), and its finiteness;
-4. bounds, detector and latch, sample by sample, with a verdict per sample.
+3. the momentum observer and the threshold's bounds, joint by joint over the
+   run (the observer's four filters are first-order recursions,
+   r_k = a·r_{k−1} + b·u_k, and so is the velocity-bin filter), and their
+   finiteness;
+4. detector and latch, sample by sample, with a verdict per sample.
 
 The state is committed once, at the last sample of the run, instead of
 being copied to scratch rows and back at every sample. A sample a phase
@@ -185,7 +187,7 @@ def _plain_run(k0: int, log: Any, model: FloatArray, views: Any, results: Any, s
     stop = _phase_observer(
         k0, stop, (t, tau), model, (const, table), (old, rows), terms, series, held
     )
-    stop = _phase_detector(k0, stop, t, model, const, old, flags[2], results)
+    _phase_detector(k0, stop, t, model, const, old, flags[2], results)
     valid = stop - k0
     if valid == 0:
         _forget(k0, reach, series)
@@ -326,7 +328,7 @@ def _phase_observer(
 def _phase_detector(
     k0: int, stop: int, t: FloatArray, model: FloatArray, const: FloatArray, old: Any,
     event: Any, results: Any,
-) -> int:  # fmt: skip
+) -> None:  # fmt: skip
     """Phase 4: detector and latch of [k0, stop), sample by sample, on the committed flags.
 
     Writes the codes and the closed events (``event``: the kernel's row of
@@ -350,7 +352,6 @@ def _phase_detector(
             for c in range(N_FLAGS - OPEN_START):
                 events[k, c] = event[OPEN_START + c]
         codes[k] = code
-    return stop
 
 
 @njit(cache=True)

@@ -339,16 +339,16 @@ def _bounds(
 
 @njit(cache=True)
 def detect(
-    time: float, const: FloatArray, model: FloatArray, rows: Any, k: int, new: Any, event: Any
+    time: float, const: FloatArray, model: FloatArray, out: Any, new: Any, event: Any
 ) -> int:
     """``Detector._step_checked`` and the latch on the flags ``new``: status | joints mask.
 
-    ``rows[:, k]`` (3, n_dof) are the residual, lower and upper bound [N m] of the sample.
+    ``out`` (3, n_dof) holds the residual, lower and upper bound [N m] of the sample.
     """
     mask, best, worst = 0, -1, 0.0
-    for j in range(rows.shape[2]):
+    for j in range(out.shape[1]):
         if const[j, MONITORED] != 0.0:
-            excursion = max(rows[0, k, j] - rows[2, k, j], rows[1, k, j] - rows[0, k, j])
+            excursion = max(out[0, j] - out[2, j], out[1, j] - out[0, j])
             if excursion > 0.0:
                 mask |= 1 << j
             if best < 0 or excursion > worst:
@@ -358,14 +358,14 @@ def detect(
             new[OPEN_END] = time
             new[OPEN_JOINTS] = float(int(new[OPEN_JOINTS]) | mask)
             if not worst <= new[OPEN_PEAK]:
-                new[OPEN_PEAK], new[OPEN_PEAK_RESIDUAL] = worst, rows[0, k, best]
+                new[OPEN_PEAK], new[OPEN_PEAK_RESIDUAL] = worst, out[0, best]
         else:
             _close(new, model[MIN_DURATION], event)
             new[OPEN], new[OPEN_START], new[OPEN_END] = 1.0, time, time
             new[OPEN_JOINTS], new[OPEN_PEAK], new[OPEN_PEAK_RESIDUAL] = (
                 mask,
                 worst,
-                rows[0, k, best],
+                out[0, best],
             )
     elif new[OPEN] != 0.0 and time - new[OPEN_END] >= model[HOLD]:
         _close(new, model[MIN_DURATION], event)
@@ -529,7 +529,7 @@ def step(time: float, sample: Any, model: FloatArray, views: Any, out: FloatArra
         if not _bounds(const, table, model, rows, start, out):
             old[PENDING] = time
             return FAULT_BOUNDS
-        code = detect(time, const, model, out.reshape((3, 1, n)), 0, new, event)
+        code = detect(time, const, model, out, new, event)
     if code >> JOINTS_SHIFT != 0 or code & 15 == COLLISION:
         new[QUIET_FROM] = time + model[GUARD]
     new[T_LAST], new[FLOOR], new[PENDING] = time, time, -np.inf

@@ -135,7 +135,7 @@ def fused_block(
         if phased and old[HAS_STREAM] != 0.0 and old[T_LAST] != old[START]:
             done = _plain_run(
                 k, (t, q, qd, tau_m, tau_j), model, views, (series, codes, events),
-                (terms, sections, held),
+                (terms, sections, held, out),
             )  # fmt: skip
             if done:
                 k += done
@@ -163,12 +163,13 @@ def _plain_run(k0: int, log: Any, model: FloatArray, views: Any, results: Any, s
 
     ``log`` is (t, q, qd, tau_m, tau_j), ``results`` (series, codes, events)
     of :func:`fused_block`, ``scratch`` (terms (3, chunk, n), section states
-    (2 n_sections, n), velocity-bin filter states (chunk, n)). The committed
+    (2 n_sections, n), velocity-bin filter states (chunk, n), one sample's
+    residual and bounds (3, n)). The committed
     state is that after the last sample done; 0 done changes nothing.
     """
     t, q, qd, tau_m, tau_j = log
     series = results[0]
-    terms, sections, held = scratch
+    terms, sections, held, out = scratch
     const, table, flags, state, work, _ = views
     old, rows = flags[0], state[0]
     n, n_rows = q.shape[1], sections.shape[0]
@@ -187,7 +188,7 @@ def _plain_run(k0: int, log: Any, model: FloatArray, views: Any, results: Any, s
     stop = _phase_observer(
         k0, stop, (t, tau), model, (const, table), (old, rows), terms, series, held
     )
-    _phase_detector(k0, stop, t, model, const, old, flags[2], results)
+    _phase_detector(k0, stop, t, model, const, (old, flags[2]), results, out)
     valid = stop - k0
     if valid == 0:
         _forget(k0, reach, series)
@@ -326,14 +327,16 @@ def _phase_observer(
 
 @njit(cache=True)
 def _phase_detector(
-    k0: int, stop: int, t: FloatArray, model: FloatArray, const: FloatArray, old: Any,
-    event: Any, results: Any,
+    k0: int, stop: int, t: FloatArray, model: FloatArray, const: FloatArray, flags: Any,
+    results: Any, out: Any,
 ) -> None:  # fmt: skip
     """Phase 4: detector and latch of [k0, stop), sample by sample, on the committed flags.
 
-    Writes the codes and the closed events (``event``: the kernel's row of
-    the event closed at a sample).
+    ``flags`` is (the committed flags, the kernel's row of the event closed
+    at a sample); writes the codes and the closed events. ``out`` (3, n) is
+    scratch for one sample's residual and bounds.
     """
+    old, event = flags
     series, codes, events = results
     for k in range(k0, stop):
         time = t[k]
@@ -343,7 +346,9 @@ def _phase_detector(
         else:
             if old[HAS_DETECTOR] == 0.0:
                 old[HAS_DETECTOR], old[OUTSIDE], old[OPEN] = 1.0, 0.0, 0.0
-            code = detect(time, const, model, series, k, old, event)
+            for j in range(out.shape[1]):
+                out[0, j], out[1, j], out[2, j] = series[0, k, j], series[1, k, j], series[2, k, j]
+            code = detect(time, const, model, out, old, event)
         if code >> JOINTS_SHIFT != 0 or code & 15 == COLLISION:
             old[QUIET_FROM] = time + model[GUARD]
         old[T_LAST], old[FLOOR], old[PENDING] = time, time, -np.inf

@@ -7,8 +7,9 @@ low four bits (``OK``, ``COLLISION``, ``SETTLING``, then the faults from
 their bounds as a bit mask (bit j: joint j + 1). ``UNJUDGED``: the entry of
 the common sample did not judge it and changed nothing; the Python checks
 say why. :func:`joints` and :func:`event_of` read a mask and a closed event
-back; :func:`refusal` holds what both streams decline. Imports no numba, so
-that the numpy stream runs without it.
+back; :func:`refusal` holds what both streams decline and :class:`StreamCodes`
+what both do with a code. Imports no numba, so that the numpy stream runs
+without it.
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ __all__ = [
     "SETTLING",
     "STATUSES",
     "UNJUDGED",
+    "StreamCodes",
     "event_of",
     "joints",
     "refusal",
@@ -78,3 +80,44 @@ def event_of(fields: tuple[float, ...] | list[float], method: str) -> Event:
     """An event from its (start, end, joints mask, peak, peak residual)."""
     start, end, mask, peak, peak_residual = fields
     return Event(start, end, joints(int(mask)), peak, peak_residual, method)
+
+
+class StreamCodes:
+    """The codes of the compiled and the numpy streams, and their reading.
+
+    ``FAULT``, ``SETTLING`` and ``UNJUDGED`` are status codes (``code & 15``),
+    ``EVENT`` the flag of an event closed at the sample, and ``JOINTS_SHIFT``
+    where the mask of the joints outside their bounds starts. A subclass
+    calls :meth:`_decode_masks` once and gives :meth:`closed`.
+    """
+
+    FAULT, SETTLING, EVENT, UNJUDGED, JOINTS_SHIFT = FAULT, SETTLING, EVENT, UNJUDGED, JOINTS_SHIFT
+    _masks: list[tuple[int, ...]] | None
+
+    def _decode_masks(self, n_dof: int) -> None:
+        """Decode every joints mask once, for up to 10 joints (1024 tuples)."""
+        self._masks = [joints(mask) for mask in range(1 << n_dof)] if n_dof <= 10 else None
+
+    def joints(self, code: int) -> tuple[int, ...]:
+        """The joints (1-based) outside their bounds, from a return code."""
+        mask = code >> JOINTS_SHIFT
+        return joints(mask) if self._masks is None else self._masks[mask]
+
+    def closed(self, method: str) -> Event:
+        """The event that closed at the last sample run (its code has ``EVENT``)."""
+        raise NotImplementedError
+
+    @staticmethod
+    def reason(status: int) -> str:
+        """What a fault status refused (an entry of ``REASONS``)."""
+        return REASONS[status - FAULT]
+
+    def decoded(self, code: int, method: str) -> tuple[str, tuple[int, ...], Event | None]:
+        """The status ("ok", "collision", "settling") or, for a fault, what it refused
+        (an entry of ``REASONS``); the joints outside their bounds; the event that closed
+        at the sample (found by ``method``), if any."""
+        status = code & 15
+        if status >= FAULT:
+            return REASONS[status - FAULT], (), None
+        event = self.closed(method) if code & EVENT else None
+        return STATUSES[status], self.joints(code), event

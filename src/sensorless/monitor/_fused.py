@@ -24,18 +24,7 @@ from ..signals import Event
 from ..thresholds import ConstantThreshold, Threshold, TimeVariantThreshold, VelocityThreshold
 from . import _compiled as kernel
 from . import _layout as layout
-from ._codes import (
-    EVENT,
-    FAULT,
-    JOINTS_SHIFT,
-    REASONS,
-    SETTLING,
-    STATUSES,
-    UNJUDGED,
-    event_of,
-    joints,
-    refusal,
-)
+from ._codes import EVENT, StreamCodes, event_of, refusal
 from ._compiled_block import BLOCK_SIGNATURE, CHUNK, fused_block
 
 if TYPE_CHECKING:
@@ -59,12 +48,10 @@ def unsupported(monitor: CollisionMonitor) -> str:
     return refusal(monitor, _FAMILIES, "compiled stream")
 
 
-class FusedStream:
+class FusedStream(StreamCodes):
     """The two arrays of one monitor's compiled stream, and what reads them.
 
-    ``FAULT``, ``SETTLING`` and ``UNJUDGED`` are status codes (``code & 15``)
-    of the kernel, ``EVENT`` its flag of an event closed at the sample, and
-    ``JOINTS_SHIFT`` where its mask of the joints outside their bounds starts.
+    The kernel's return codes are read as :class:`~._codes.StreamCodes` reads them.
 
     Parameters
     ----------
@@ -73,8 +60,6 @@ class FusedStream:
         observer, fitted threshold, detector, limits, policy and settling
         window are read once.
     """
-
-    FAULT, SETTLING, EVENT, UNJUDGED, JOINTS_SHIFT = FAULT, SETTLING, EVENT, UNJUDGED, JOINTS_SHIFT
 
     def __init__(self, monitor: CollisionMonitor) -> None:
         observer, policy, detector = monitor._observer, monitor.policy, monitor.detector
@@ -114,7 +99,7 @@ class FusedStream:
         )
         self._flags = self._buffers[:flags].reshape(3, layout.N_FLAGS)
         self._state = self._buffers[flags : flags + rows].reshape(2, -1, n)
-        self._masks = [joints(mask) for mask in range(1 << n)] if n <= 10 else None
+        self._decode_masks(n)
         for function, signatures in (
             (_fused_step, (kernel.SIGNATURE,)),
             (_fused_block, (BLOCK_SIGNATURE,)),
@@ -178,16 +163,7 @@ class FusedStream:
         """
         q, qd, tau_m, tau_j = sample
         code = self.step(time, q, qd, tau_m, tau_j, self._model, self._buffers, out)
-        status = code & 15
-        if status >= FAULT:
-            return REASONS[status - FAULT], (), None
-        event = self.closed(method) if code & EVENT else None
-        return STATUSES[status], self.joints(code), event
-
-    def joints(self, code: int) -> tuple[int, ...]:
-        """The joints (1-based) outside their bounds, from a return code of the kernel."""
-        mask = code >> JOINTS_SHIFT
-        return joints(mask) if self._masks is None else self._masks[mask]
+        return self.decoded(code, method)
 
     def closed(self, method: str) -> Event:
         """The event that closed at the last sample run (its code has ``EVENT``)."""
@@ -221,11 +197,6 @@ class FusedStream:
         events = [event_of(row, method) for row in closed[np.flatnonzero(codes & EVENT)].tolist()]
         last = self._finish(flags[0], method)
         return codes, series, events if last is None else [*events, last]
-
-    @staticmethod
-    def reason(status: int) -> str:
-        """What a fault status refused (an entry of ``REASONS`` in :mod:`._codes`)."""
-        return REASONS[status - FAULT]
 
     @property
     def floor(self) -> float:

@@ -59,14 +59,11 @@ from ._codes import (
     FAULT_TAU_M,
     FAULT_TIME,
     FAULT_VELOCITY,
-    JOINTS_SHIFT,
     OK,
-    REASONS,
     SETTLING,
-    STATUSES,
     UNJUDGED,
+    StreamCodes,
     event_of,
-    joints,
     refusal,
 )
 from ._numpy_parts import (
@@ -115,10 +112,10 @@ def unsupported(monitor: CollisionMonitor) -> str:
     return refusal(monitor, _FAMILIES, "numpy stream")
 
 
-class NumpyStream:
+class NumpyStream(StreamCodes):
     """One monitor's stream in numpy: the interface of :class:`~._fused.FusedStream`.
 
-    ``FAULT`` and ``SETTLING`` are status codes (``code & 15``), as the compiled kernel's.
+    Its return codes are the compiled kernel's (:class:`~._codes.StreamCodes`).
 
     Parameters
     ----------
@@ -127,8 +124,6 @@ class NumpyStream:
         observer, fitted threshold, detector, limits, policy and settling
         window are read once.
     """
-
-    FAULT, SETTLING, EVENT, UNJUDGED, JOINTS_SHIFT = FAULT, SETTLING, EVENT, UNJUDGED, JOINTS_SHIFT
 
     def __init__(self, monitor: CollisionMonitor) -> None:
         observer, policy, detector = monitor._observer, monitor.policy, monitor.detector
@@ -174,7 +169,7 @@ class NumpyStream:
             self._monitored, detector.min_duration - TIME_TOLERANCE,
             detector.hold - TIME_TOLERANCE, self._release,
         )  # fmt: skip
-        self._masks = [joints(mask) for mask in range(1 << n)] if n <= 10 else None
+        self._decode_masks(n)
         m = 2 * sos.shape[0]  # section states, rows 0 … m − 1; the observer block after them
         self._buffers = (np.zeros((m + BIN + 1, n)), np.zeros((m + BIN + 1, n)))
         self._views = tuple(layout(buffer, m, check) for buffer in self._buffers)
@@ -255,14 +250,7 @@ class NumpyStream:
             return self._refuse(time, time_fault)
         fresh = not restart and fl.t_last == fl.start
         views = self._start_views if restart or fresh else committed[11]
-        p, coriolis, gravity, sign = views[:4]  # _terms, inline: this runs once per sample
-        model, data = self._model, self._data
-        p[...] = _rnea(model, data, q, self._zero, s_v)  # p + g
-        _dot(s_v, _coriolis(model, data, q, s_v), out=coriolis)
-        gravity[...] = _gravity(model, data, q)
-        _sign(s_v, out=sign)
-        if self._friction_kind != "none":
-            self._friction_rows(s_v, views)
+        self._terms(q, s_v, views)
         if restart:
             self._initial(q, qd if qd.shape[0] else self._zero, views[-1])
         elif fresh:  # the observer starts at the first velocity estimate
@@ -368,7 +356,8 @@ class NumpyStream:
         _dot(v, _coriolis(model, data, q, v), out=coriolis)
         gravity[...] = _gravity(model, data, q)
         _sign(v, out=sign)
-        self._friction_rows(v, views)
+        if self._friction_kind != "none":
+            self._friction_rows(v, views)
 
     def _friction_rows(self, v: FloatArray, views: tuple[FloatArray, ...]) -> None:
         """The rows FA … FC (their sum is τ̂_fr(``v``)) and the sign² and q̇ rows they use."""
@@ -411,18 +400,7 @@ class NumpyStream:
         :data:`~._codes.REASONS`); the joints outside their bounds; the event that
         closed at the sample (found by ``method``), if any.
         """
-        code = self._step(time, *sample, out)
-        status = code & 15
-        if status >= FAULT:
-            return REASONS[status - FAULT], (), None
-        event = event_of(self._closed, method) if code & EVENT else None
-        mask = code >> JOINTS_SHIFT
-        return STATUSES[status], joints(mask) if self._masks is None else self._masks[mask], event
-
-    def joints(self, code: int) -> tuple[int, ...]:
-        """The joints (1-based) outside their bounds, from a return code of :meth:`_step`."""
-        mask = code >> JOINTS_SHIFT
-        return joints(mask) if self._masks is None else self._masks[mask]
+        return self.decoded(self._step(time, *sample, out), method)
 
     def closed(self, method: str) -> Event:
         """The event that closed at the last sample run (its code has ``EVENT``)."""
@@ -468,11 +446,6 @@ class NumpyStream:
         finally:
             self._restore(saved)
         return codes, series, events if last is None else [*events, last]
-
-    @staticmethod
-    def reason(status: int) -> str:
-        """What a fault status refused (an entry of :data:`~._codes.REASONS`)."""
-        return REASONS[status - FAULT]
 
     @property
     def floor(self) -> float:

@@ -29,6 +29,7 @@ __all__ = [
     "check_finite",
     "check_increasing",
     "check_int",
+    "check_range",
     "check_scalar",
     "check_type",
     "first_irregular_step",
@@ -167,6 +168,20 @@ def check_scalar(value: Any, name: str, unit: str, sign: Sign = "positive") -> f
         Required sign.
     """
     return _number(value, name, f"a finite number{_SIGN_TEXT[sign]} [{unit}]", sign)
+
+
+def check_range(value: Any, name: str, unit: str, sign: Sign = "any") -> tuple[float, float]:
+    """Return ``value`` as a range (low, high) of finite floats [unit], low <= high.
+
+    Each end is checked as :func:`check_scalar` checks it with ``sign``.
+    """
+    pair = tuple(value) if isinstance(value, tuple | list) else ()
+    if len(pair) != 2:
+        raise InputValueError(f"{name} must be a range (low, high) [{unit}]; got {value!r}")
+    low, high = (check_scalar(v, name, unit, sign) for v in pair)
+    if low > high:
+        raise InputValueError(f"{name} must be a range (low, high) with low <= high; got {value!r}")
+    return low, high
 
 
 def check_int(value: Any, name: str, minimum: int, owner: str = "") -> int:

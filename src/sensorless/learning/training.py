@@ -51,7 +51,7 @@ from typing import Any
 
 import numpy as np
 
-from .._validation import FloatArray, Sign, check_int, check_scalar
+from .._validation import FloatArray, check_int, check_range, check_scalar
 from .._version import __version__
 from ..evaluation import collision_windows
 from ..exceptions import InputValueError, UnknownNameError
@@ -193,23 +193,13 @@ def _randomised(
     return run.with_sample_rate(rate), drawn
 
 
-def _range(value: Any, name: str, unit: str, sign: Sign) -> tuple[float, float]:
-    pair = tuple(value) if isinstance(value, tuple | list) else ()
-    if len(pair) != 2:
-        raise InputValueError(f"{name} must be a range (low, high) [{unit}]; got {value!r}")
-    low, high = (check_scalar(v, name, unit, sign) for v in pair)
-    if low > high:
-        raise InputValueError(f"{name} must be a range (low, high) with low <= high; got {value!r}")
-    return low, high
-
-
 def _check_recipe(recipe: TrainingRecipe) -> None:
     """The payload and rate ranges of ``recipe`` (the other fields are checked where used)."""
     share = check_scalar(recipe.payload_share, "payload_share", "-", "nonnegative")
     if share > 1.0:
         raise InputValueError(f"payload_share must be in [0, 1] [-]; got {share}")
-    _range(recipe.payload_mass, "payload_mass", "kg", "nonnegative")
-    _range(recipe.rate_factor, "rate_factor", "-", "positive")
+    check_range(recipe.payload_mass, "payload_mass", "kg", "nonnegative")
+    check_range(recipe.rate_factor, "rate_factor", "-", "positive")
     corners = (recipe.payload_com_low, recipe.payload_com_high)
     if any(len(tuple(c)) != 3 for c in corners):
         raise InputValueError(
@@ -217,7 +207,7 @@ def _check_recipe(recipe: TrainingRecipe) -> None:
             f"{corners[0]!r} and {corners[1]!r}"
         )
     for low, high in zip(*corners, strict=True):
-        _range((low, high), "payload_com_low .. payload_com_high", "m", "any")
+        check_range((low, high), "payload_com_low .. payload_com_high", "m", "any")
 
 
 def run_draws(recipe: TrainingRecipe) -> list[dict[str, Any]]:

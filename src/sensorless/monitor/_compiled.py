@@ -83,8 +83,12 @@ from ._layout import (
 # isort: on
 
 __all__ = [
+    "READ",
+    "READ2",
     "SAMPLE_SIGNATURES",
     "SIGNATURE",
+    "WRITE",
+    "WRITE2",
     "bound",
     "cascade",
     "detect",
@@ -96,14 +100,15 @@ __all__ = [
 ]
 
 
-_READ = types.Array(types.float64, 1, "C", readonly=True)
-_READ2 = types.Array(types.float64, 2, "C", readonly=True)
-_WRITE, _WRITE2 = types.Array(types.float64, 1, "C"), types.Array(types.float64, 2, "C")
-SIGNATURE = types.int64(types.float64, _READ, _READ, _READ, _READ, _READ, _WRITE, _WRITE2)
+# the arrays of the signatures: float64, C-contiguous, read-only or writable
+READ = types.Array(types.float64, 1, "C", readonly=True)
+READ2 = types.Array(types.float64, 2, "C", readonly=True)
+WRITE, WRITE2 = types.Array(types.float64, 1, "C"), types.Array(types.float64, 2, "C")
+SIGNATURE = types.int64(types.float64, READ, READ, READ, READ, READ, WRITE, WRITE2)
 """Arguments of :func:`fused_step`; writable arrays convert to its read-only types."""
 SAMPLE_SIGNATURES = tuple(
-    types.int64(types.float64, sample, sample, sample, _READ, _WRITE, _WRITE2)
-    for sample in (_WRITE, _READ)
+    types.int64(types.float64, sample, sample, sample, READ, WRITE, WRITE2)
+    for sample in (WRITE, READ)
 )
 """Arguments of :func:`fused_step_sample`: writable samples and read-only ones (rows of a
 ``Log``), each an exact match for numba's dispatcher (a conversion costs it 0.2 µs a call)."""

@@ -36,7 +36,18 @@ from .._validation import FloatArray
 from ..friction._static_kernel import sign, static_torque
 from ..robots._recursion_numba import terms_at
 from ._codes import COLLISION, EVENT, FAULT, FAULT_VELOCITY, JOINTS_SHIFT, SETTLING
-from ._compiled import bound, cascade, detect, observer_update, step, views_of
+from ._compiled import (
+    READ,
+    READ2,
+    WRITE,
+    WRITE2,
+    bound,
+    cascade,
+    detect,
+    observer_update,
+    step,
+    views_of,
+)
 from ._layout import (
     ADAPT_AT,
     BIN_STATE,
@@ -84,12 +95,10 @@ __all__ = ["BLOCK_SIGNATURE", "CHUNK", "fused_block"]
 
 CHUNK = 128
 """Longest run of plain samples done by phases (its p, Cᵀq̇, g stay in cache)."""
-_READ = types.Array(types.float64, 1, "C", readonly=True)
-_READ2 = types.Array(types.float64, 2, "C", readonly=True)
 BLOCK_SIGNATURE = types.void(
-    _READ, _READ2, _READ2, _READ2, _READ2, _READ, types.Array(types.float64, 1, "C"),
+    READ, READ2, READ2, READ2, READ2, READ, WRITE,
     types.Array(types.float64, 3, "C"), types.Array(types.int64, 1, "C"),
-    types.Array(types.float64, 2, "C"), types.int64,
+    WRITE2, types.int64,
 )  # fmt: skip
 """Arguments of :func:`fused_block`."""
 

@@ -21,7 +21,9 @@ at the flange as :func:`sensorless.robots.load` builds them), this script
 4. times, in the same process and on the same motion (torques without the
    pulse: free motion, no detection), the three Pinocchio calls in a Python
    loop, ``MomentumTerms.terms_one`` (numba) in a Python loop, the fused
-   stream step ``CollisionMonitor.step`` (numba, time-variant threshold),
+   stream step ``CollisionMonitor.step`` (numba, time-variant threshold), the
+   same step called from a numba-compiled loop
+   (``CollisionMonitor.compiled_step``),
    ``MomentumTerms.terms`` (numba) over the whole array and the fused batch
    ``CollisionMonitor.run`` (numba; by phases, and every sample through the
    stream step's kernel), and prints one table.
@@ -29,8 +31,8 @@ at the flange as :func:`sensorless.robots.load` builds them), this script
 Every figure is a loop over all samples divided by their number [µs per
 sample], one thread: the median over ``--rounds`` rounds, each of which runs
 the C++ binary and then the Python loops, of the median of ``--repeat`` loops;
-the ratio of the fused step to ext_observer's is taken per round, then its
-median. Without g++, the headers or the
+the ratios of the fused step (from Python and from a compiled loop) to
+ext_observer's are taken per round, then their median. Without g++, the headers or the
 libraries, it says what is missing and exits 0. The headers the wheels leave
 out are two header-only wheels: ``pip install cmeel-eigen cmeel-urdfdom-headers``.
 
@@ -100,6 +102,7 @@ DEFINES = [
 UPDATE = "C++ (b) standard calls + observer update"
 EXT = "C++ (c) ext_observer MomentumObserver on the standard calls"
 STEP = "numba: CollisionMonitor.step (fused stream step)"
+LOOP = "numba: the same step in a compiled loop (compiled_step)"
 
 
 # ---------------------------------------------------------------- build
@@ -307,6 +310,13 @@ def python_loops(
             monitor.step(tk, qk, tauk)
 
     loops[STEP] = step_loop
+    user_loop, codes = compiled_loop(), np.zeros(n, dtype=np.int64)
+
+    def step_in_a_compiled_loop() -> None:
+        monitor.reset()
+        user_loop(*monitor.compiled_step(), t, q, tau_free, codes)
+
+    loops[LOOP] = step_in_a_compiled_loop
     loops["numba: MomentumTerms.terms, whole array"] = lambda: terms.terms(q, qd)
     log = Log(t, q, tau_m=tau_free)
     loops["numba: CollisionMonitor.run (fused batch, by phases)"] = lambda: monitor.run(log)
@@ -317,6 +327,20 @@ def python_loops(
         *columns, "batch", 0
     )
     return loops
+
+
+def compiled_loop() -> Callable[..., None]:
+    """A user's numba loop of the stream step over arrays (t, q, τ_m), as
+    :class:`~sensorless.monitor.CompiledStep` describes it; the codes go to ``codes``."""
+    from numba import njit
+
+    @njit
+    def loop(function, model, buffers, t, q, tau, codes):  # type: ignore[no-untyped-def]
+        out = np.empty((3, q.shape[1]))
+        for k in range(t.shape[0]):
+            codes[k] = function(t[k], q[k], tau[k], tau[k], model, buffers, out)
+
+    return loop  # type: ignore[no-any-return]
 
 
 def residual_check(
@@ -345,9 +369,10 @@ def residual_check(
 # ---------------------------------------------------------------- one robot, the table
 def robot_column(
     name: str, n_samples: int, repeat: int, rounds: int
-) -> tuple[str, dict[str, float], list[float], bool]:
+) -> tuple[str, dict[str, float], dict[str, list[float]], bool]:
     """Column label, {row label: µs per sample}, the per-round ratios of the fused stream step
-    to ext_observer's step, and whether the residual check passed.
+    (from Python, from a compiled loop) to ext_observer's step, and whether the residual check
+    passed.
 
     Each of ``rounds`` rounds runs the C++ binary (median of ``repeat`` passes per variant)
     and then every Python loop (median of ``repeat``); a row's figure is the median over the
@@ -365,7 +390,7 @@ def robot_column(
     np.savetxt(samples, np.hstack([q, qd, tau]), fmt="%.17g", delimiter=",", header=header)
     loops = python_loops(robot, t, q, qd, tau_free)
     per_round: dict[str, list[float]] = {}
-    ratios = []
+    ratios: dict[str, list[float]] = {STEP: [], LOOP: []}
     ok = True
     for index in range(rounds):
         times, checks = run_cpp(urdf, samples, repeat)
@@ -377,8 +402,9 @@ def robot_column(
         row.update({label: median_us(loop, n_samples, repeat) for label, loop in loops.items()})
         for label, cost in row.items():
             per_round.setdefault(label, []).append(cost)
-        if EXT in row and STEP in row:
-            ratios.append(row[STEP] / row[EXT])
+        for label, ratio in ratios.items():
+            if EXT in row and label in row:
+                ratio.append(row[label] / row[EXT])
     column = {label: statistics.median(costs) for label, costs in per_round.items()}
     return f"{name} ({robot.n_dof} dof)", column, ratios, ok
 
@@ -404,7 +430,7 @@ def check_residuals(
 
 def print_table(
     columns: dict[str, dict[str, float]],
-    ratios: dict[str, list[float]],
+    ratios: dict[str, dict[str, list[float]]],
     n_samples: int,
     repeat: int,
     rounds: int,
@@ -425,12 +451,13 @@ def print_table(
             row += f"{cost:16.3f}{cost / columns[n][UPDATE]:7.2f}"
         print(row)
     for n in names:
-        if ratios[n]:
-            each = " ".join(f"{r:.2f}" for r in ratios[n])
-            print(
-                f"{n}: fused stream step / ext_observer step = "
-                f"{statistics.median(ratios[n]):.2f} (median; per round {each})"
-            )
+        for label, per_round in ratios[n].items():
+            if per_round:
+                each = " ".join(f"{r:.2f}" for r in per_round)
+                print(
+                    f"{n}: {label.removeprefix('numba: ')} / ext_observer step = "
+                    f"{statistics.median(per_round):.2f} (median; per round {each})"
+                )
 
 
 # ---------------------------------------------------------------- main

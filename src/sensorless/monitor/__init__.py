@@ -17,6 +17,7 @@ Units SI and radians; time along axis 0.
 
 from __future__ import annotations
 
+from ._codes import CompiledStep
 from .adaptation import Adaptation
 from .batch import FaultSpan, MonitorRun
 from .calibration import (
@@ -45,6 +46,7 @@ __all__ = [
     "Adaptation",
     "Calibration",
     "CollisionMonitor",
+    "CompiledStep",
     "FaultSpan",
     "LevelledMonitor",
     "LevelledRun",

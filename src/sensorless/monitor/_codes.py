@@ -8,15 +8,20 @@ their bounds as a bit mask (bit j: joint j + 1). ``UNJUDGED``: the entry of
 the common sample did not judge it and changed nothing; the Python checks
 say why. :func:`joints` and :func:`event_of` read a mask and a closed event
 back; :func:`refusal` holds what both streams decline and :class:`StreamCodes`
-what both do with a code. Imports no numba, so that the numpy stream runs
+what both do with a code; :class:`CompiledStep` hands the compiled step to a
+user's own compiled loop. Imports no numba, so that the numpy stream runs
 without it.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from collections.abc import Iterator
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, ClassVar
 
+from .._validation import FloatArray
 from ..signals import Event
+from ._layout import N_FLAGS, OPEN_START
 
 if TYPE_CHECKING:
     from .stream import CollisionMonitor
@@ -41,6 +46,7 @@ __all__ = [
     "SETTLING",
     "STATUSES",
     "UNJUDGED",
+    "CompiledStep",
     "StreamCodes",
     "event_of",
     "joints",
@@ -121,3 +127,66 @@ class StreamCodes:
             return REASONS[status - FAULT], (), None
         event = self.closed(method) if code & EVENT else None
         return STATUSES[status], self.joints(code), event
+
+
+@dataclass(frozen=True)
+class CompiledStep:
+    """One stream step for the user's own loop compiled with numba, on a monitor's state.
+
+    From :meth:`CollisionMonitor.compiled_step
+    <sensorless.monitor.CollisionMonitor.compiled_step>`. Inside an
+    ``@numba.njit`` function that receives the three fields,
+    ``code = function(t, q, tau_m, tau_j, model, buffers, out)`` judges one
+    sample as :meth:`~sensorless.monitor.CollisionMonitor.step` does, on the
+    same state: the monitor's ``step``, ``latched`` and ``finish`` go on
+    from where the loop stopped, and the reverse.
+
+    - ``t``: float, the sample's time [s];
+    - ``q``: (n_dof,) joint positions [rad]; ``tau_m``, ``tau_j``: (n_dof,)
+      motor and joint-sensor torques [N m] (``tau_j`` is ``tau_m`` for the
+      motor-torque observer); float64 and C-contiguous, writable or not
+      (numba refuses other types when it compiles the loop);
+    - ``out``: a writable float64 (3, n_dof) array; a judged sample writes its
+      residual, lower and upper bound [N m] there.
+
+    ``code & 15`` is the status: ``OK``, ``COLLISION`` (latched) or
+    ``SETTLING``; from ``FAULT`` on, a fault that changed no state, which
+    :meth:`reason` names; ``UNJUDGED`` for samples of the wrong length or a
+    non-finite time, which change nothing. ``code >> JOINTS_SHIFT`` is the
+    mask of the joints outside their bounds (bit j: joint j + 1). With
+    ``code & EVENT``, an event closed at the sample; its (start [s], end [s],
+    joints mask, peak excursion [N m], peak residual [N m]) are
+    ``buffers[EVENT_AT:EVENT_AT + 5]`` until the next sample.
+
+    The Python ``step`` also gives a fault's message, and counts a bad sample
+    the loop leaves unjudged toward the gap rule.
+    """
+
+    function: Any
+    """``fused_step_sample`` of :mod:`sensorless.monitor._compiled` (a numba dispatcher)."""
+    model: FloatArray
+    """The monitor's constants, read-only."""
+    buffers: FloatArray
+    """The stream's state, written by each judged sample."""
+
+    OK: ClassVar[int] = OK
+    COLLISION: ClassVar[int] = COLLISION
+    SETTLING: ClassVar[int] = SETTLING
+    FAULT: ClassVar[int] = FAULT
+    UNJUDGED: ClassVar[int] = UNJUDGED
+    EVENT: ClassVar[int] = EVENT
+    JOINTS_SHIFT: ClassVar[int] = JOINTS_SHIFT
+    EVENT_AT: ClassVar[int] = 2 * N_FLAGS + OPEN_START
+
+    def __iter__(self) -> Iterator[Any]:
+        return iter((self.function, self.model, self.buffers))
+
+    @staticmethod
+    def reason(code: int) -> str:
+        """The status of ``code`` as :class:`~sensorless.detection.Verdict` names it ("ok",
+        "collision", "settling"), what a fault refused (an entry of ``REASONS``), or
+        "unjudged"."""
+        status = code & 15
+        if status == UNJUDGED:
+            return "unjudged"
+        return STATUSES[status] if status < FAULT else REASONS[status - FAULT]

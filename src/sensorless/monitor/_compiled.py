@@ -48,6 +48,7 @@ from numba import njit, types
 
 from .._validation import FloatArray
 from ..friction._static_kernel import sign, static_torque
+from ..robots._numba_views import view
 from ..robots._recursion_numba import terms_at
 from ._codes import (
     COLLISION,
@@ -182,7 +183,7 @@ def _terms(q: FloatArray, const: FloatArray, s: Any, work: Any) -> None:
     """p, Cᵀq̇ and g at (q, the row ``VELOCITY`` of ``s``) into the rows ``TERMS`` of ``s``."""
     n = q.shape[0]
     velocity = s[VELOCITY : VELOCITY + 1]
-    terms_at(0, q.reshape((1, n)), velocity, const, work, s[TERMS:SECTIONS].reshape((3, 1, n)))
+    terms_at(0, view(q, (1, n)), velocity, const, work, view(s[TERMS:SECTIONS], (3, 1, n)))
 
 
 @njit(cache=True)
@@ -401,17 +402,17 @@ def views_of(model: FloatArray, buffers: FloatArray, n: int) -> Any:
     """
     n_rows = SECTIONS + 2 * int(model[N_SECTIONS])
     table_at = int(model[TABLE_AT])
-    const = model[int(model[CONST_AT]) : table_at].reshape((n, N_CONST))
+    const = view(model[int(model[CONST_AT]) : table_at], (n, N_CONST))
     table_end = int(model[ADAPT_AT]) if model[ADAPT_AT] > 0.0 else model.shape[0]
-    table = model[table_at:table_end].reshape((3, (table_end - table_at) // (3 * n), n))
-    flags = buffers[: 3 * N_FLAGS].reshape((3, N_FLAGS))
+    table = view(model[table_at:table_end], (3, (table_end - table_at) // (3 * n), n))
+    flags = view(buffers[: 3 * N_FLAGS], (3, N_FLAGS))
     end = 3 * N_FLAGS + 2 * n_rows * n
-    state = buffers[3 * N_FLAGS : end].reshape((2, n_rows, n))
+    state = view(buffers[3 * N_FLAGS : end], (2, n_rows, n))
     size = int(model[ADAPT_SIZE])
     adapter_at = int(model[ADAPT_STATE])
     region = buffers[adapter_at:]
     adapter = (region[:size], region[size : 2 * size], region[2 * size :])
-    return const, table, flags, state, buffers[end : end + 23 * n].reshape((n, 23)), adapter
+    return const, table, flags, state, view(buffers[end : end + 23 * n], (n, 23)), adapter
 
 
 @njit(cache=True)

@@ -15,6 +15,7 @@ from numba import njit
 
 from .._validation import FloatArray
 from ..observers._adaptive_kernel import compiled_rows as adapter_rows
+from ..robots._numba_views import view
 from ._layout import ADAPT_AT, MODEL_TORQUE, RESIDUAL, VELOCITY
 
 __all__ = ["adapt", "adapter_restart"]
@@ -39,15 +40,15 @@ def _adapter_parts(model: FloatArray, region: FloatArray, n: int) -> Any:
     pole, weight, v_s = model[p : p + n], model[p + n : p + 2 * n], model[p + 2 * n : p + 3 * n]
     max_corr, step_bound = model[p + 3 * n : p + 4 * n], model[p + 4 * n : p + 5 * n]
     p += 5 * n
-    norm_w = model[p : p + n * m].reshape((n, m))
-    box = model[p + n * m : p + 2 * n * m].reshape((n, m))
-    theta = region[: n * m].reshape((n, m))
-    estimate = region[n * m : 2 * n * m].reshape((n, m))
+    norm_w = view(model[p : p + n * m], (n, m))
+    box = view(model[p + n * m : p + 2 * n * m], (n, m))
+    theta = view(region[: n * m], (n, m))
+    estimate = view(region[n * m : 2 * n * m], (n, m))
     r = 2 * n * m
-    cov = region[r : r + n * m * m].reshape((n, m, m))
+    cov = view(region[r : r + n * m * m], (n, m, m))
     r += n * m * m
-    reg = region[r : r + 3 * n].reshape((n, 3))
-    freg = region[r + 3 * n : r + (3 + m) * n].reshape((n, m))
+    reg = view(region[r : r + 3 * n], (n, 3))
+    freg = view(region[r + 3 * n : r + (3 + m) * n], (n, m))
     r += (3 + m) * n
     corr, fcorr = region[r : r + n], region[r + n : r + 2 * n]
     updates, started = region[r + 2 * n : r + 3 * n], region[r + 3 * n : r + 3 * n + 1]

@@ -35,7 +35,7 @@ from ..signals import Event, ObserverSignals
 from ..thresholds import ModelBasedThreshold, Threshold
 from ..thresholds.checks import other_model, parameters_differ
 from ..thresholds.files import family_name
-from ._codes import EVENT, FAULT, JOINTS_SHIFT, UNJUDGED
+from ._codes import EVENT, FAULT, JOINTS_SHIFT, UNJUDGED, CompiledStep
 from ._numpy_stream import NumpyStream
 from ._numpy_stream import unsupported as numpy_unsupported
 from ._python_stream import PythonStream, judge
@@ -235,6 +235,21 @@ class CollisionMonitor:
         if self._fused is None:
             return "python"
         return "numpy" if isinstance(self._fused, NumpyStream) else "numba"
+
+    def compiled_step(self) -> CompiledStep:
+        """This monitor's stream step for a loop compiled with numba (see :class:`CompiledStep`).
+
+        Raises
+        ------
+        InputValueError
+            If the monitor does not run on the ``"numba"`` backend.
+        """
+        if self.backend != "numba":
+            raise InputValueError(
+                f"compiled_step needs the 'numba' backend; this monitor runs on {self.backend!r}"
+            )
+        assert self._compiled is not None  # the numba backend has its compiled step
+        return CompiledStep(*self._compiled[:3])
 
     # ----------------------------------------------------------------- batch
     def run(self, log: Log) -> tuple[ObserverSignals, list[Event]]:

@@ -28,6 +28,7 @@ import numpy as np
 from numba import njit
 
 from .._validation import FloatArray
+from ._numba_views import view
 
 __all__ = ["terms_at", "terms_batch", "terms_one"]
 
@@ -187,11 +188,11 @@ def terms_one(
     n_dof = q.shape[0]
     terms_at(
         0,
-        q.reshape((1, n_dof)),
-        qd.reshape((1, n_dof)),
+        view(q, (1, n_dof)),
+        view(qd, (1, n_dof)),
         consts,
         scratch,
-        out.reshape((3, 1, n_dof)),
+        view(out, (3, 1, n_dof)),
     )
 
 

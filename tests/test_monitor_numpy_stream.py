@@ -158,6 +158,30 @@ def test_puma_armature_friction_filters_and_per_joint_gains() -> None:
     _run_both(mine, reference, _samples(test, 600))
 
 
+def test_constant_subset_and_per_joint_bin_filters(panda) -> None:
+    """The constant bounds (±r̂ from the observer's product, L and U constant rows) with joints
+    not monitored (bounds ∓∞); the velocity bins' filter of τ_fme with one gain per joint
+    (the filter after the product instead of in it), on the Python path's verdicts."""
+    test, nominal, tuned = panda
+    free = [load_scenario("panda-gaz").with_duration(2.0).run(seed=1, collisions=False).log]
+    constant = tune(free, nominal, "constant", margin=0.05, folds=None, joints=[1, 3, 4, 6])
+    mine, reference = _pair(nominal, constant)
+    assert mine._fused._constant and not mine._fused._bounds._whole
+    statuses, _ = _run_both(mine, reference, _samples(test, 900))
+    assert "collision" in statuses
+    threshold, observer_settings = tuned["velocity"]
+    threshold = copy.copy(threshold)
+    gains = np.linspace(15.0, 40.0, nominal.n_dof)
+    threshold.gain_ = gains  # per-joint gains: not a tuning option, set directly
+    mine, reference = _pair(nominal, (threshold, observer_settings))
+    for monitor in (mine, reference):
+        monitor._observer = MomentumObserver(nominal, monitor.dt, gains)
+    mine._fused = NumpyStream(mine)  # rebuilt on the new observer and threshold
+    mine._compiled = (*mine._fused.sample, mine._fused)
+    assert mine._fused._bin_gains is not None and mine._fused._gains is not None
+    _run_both(mine, reference, _samples(test, 900))
+
+
 def test_measured_velocity_and_joint_torques(panda) -> None:
     test, nominal, tuned = panda
     mine, reference = _pair(nominal, tuned["time-variant"])
@@ -237,6 +261,21 @@ def test_gap_resume_release_and_reset(panda) -> None:
     assert "collision" in statuses
     mine.reset()
     assert not mine.latched and mine.step(*regular[0]).status == "settling"
+
+
+@pytest.mark.parametrize("method", ["constant", "velocity"])
+@pytest.mark.parametrize("settle", [0.0, 0.0035])
+def test_gap_resume_for_the_constant_and_bin_bounds(panda, method, settle) -> None:
+    """A gap and a resume for the constant bounds (rows LC, UC) and the velocity bins (the
+    filter of τ_fme restarts at τ_fme; with no settling window the second sample of a stream
+    reads its block of a start); the Python path's verdicts."""
+    test, nominal, tuned = panda
+    mine, reference = _pair(nominal, tuned[method], policy=StreamPolicy(settle=settle))
+    samples = [(test.t[k], test.q[k], test.tau_m[k]) for k in [*range(200), *range(810, 1100)]]
+    statuses, _ = _run_both(mine, reference, samples)
+    settling = statuses[201:].count("settling")  # after the gap, as at the start
+    assert statuses[200] == "fault" and settling == statuses[:200].count("settling")
+    assert settling == (0 if settle == 0.0 else 4) and set(statuses[210:]) <= {"ok", "collision"}
 
 
 class _Exploding(Viscous):

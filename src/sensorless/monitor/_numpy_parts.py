@@ -1,15 +1,13 @@
-"""Parts of the numpy stream (:mod:`._numpy_stream`): row layout, observer matrix, bounds, flags.
+"""Parts of the numpy stream (:mod:`._numpy_stream`): row layout, observer matrix, bounds.
 
 The rows of one observer block, the matrix of the observer's update over
-them, the bounds of the constant, time-variant and velocity-bin thresholds on
-them, and the stream's scalars (time rules, detector, latch). Needs no
-numba. Units SI and radians.
+them and the bounds of the constant, time-variant and velocity-bin
+thresholds on them (the detector and the latch: :mod:`._numpy_rules`).
+Needs no numba. Units SI and radians.
 """
 
 from __future__ import annotations
 
-import math
-from bisect import bisect_right
 from typing import Any
 
 import numpy as np
@@ -17,34 +15,57 @@ import numpy as np
 from .._validation import FloatArray
 from ..friction.static import Coulomb, CoulombViscous, HystereticError, Viscous
 from ..thresholds import ConstantThreshold, TimeVariantThreshold, VelocityThreshold
-from ._codes import COLLISION, JOINTS_SHIFT, OK
 
 __all__ = [
     "Bounds",
-    "EventRules",
-    "Flags",
     "block_views",
     "layout",
+    "limits_check",
     "observer_matrix",
+    "start_rows",
 ]
 
 # Rows of the observer block (one block per buffer, and one for a (re)start): this sample's
 # p + g (one rnea of the model), Cᵀq̇, g, sign, sign², q̇ and three friction rows whose sum is
 # τ̂_fr (scratch); the state:
 # q̇, q, τ_m, τ_J (the rows the limits check), the last sample's p, Cᵀq̇ − g, τ̂_fr and sign,
-# the filters r̂, h, filtered τ̂_fr and filtered sign; a row of ones; the velocity bins' filter.
+# the filters r̂, h, filtered τ̂_fr and filtered sign; a row of ones; for the velocity bins: the
+# filter of τ_fme before this sample (a copy of the last BIN, or τ_fme at its start), this
+# sample's bin entries (L and U less the centre, τ_fme), the filter of τ_fme. For the
+# constant bounds instead: −r̂ and r̂ (copies the product writes), then L and U (constant rows).
 P1, C1, G1, S1, SS1, VV1, FA, FB, FC = range(9)
-V, Q, TM, TJ, P, VG, FR, SG0, R, H, F, SG, ONE, BIN = range(9, 23)
+V, Q, TM, TJ, P, VG, FR, SG0, R, H, F, SG, ONE, BP, LO, HI, FME, BIN = range(9, 27)
+NR, RR, LC, UC = range(BP, BP + 4)
 
 
-def observer_matrix(dt: float, weight: float, pole: float, tau: int) -> FloatArray:
+def observer_matrix(
+    dt: float, weight: float, pole: float, tau: int, bins: tuple[float, float] | None = None,
+    constant: bool = False,
+) -> FloatArray:  # fmt: skip
     """Rows P … SG of the new state from the rows P1 … SG of the observer block.
 
     ``MomentumObserver._step_checked`` as one product: the inputs of the four
     filters (increment of p over dt, trapezoid of Cᵀq̇ − g and τ̂_fr, held τ
     in the row ``tau``), then y′ = ``weight`` · input + ``pole`` · y. The row
-    P1 holds p + g (p = P1 − G1).
+    P1 holds p + g (p = P1 − G1). With ``bins`` (the weight and pole of the
+    velocity bins' filter of τ_fme, the same for every joint): rows P … BIN
+    from the rows P1 … BIN, the rows ONE, LO, HI and FME copied, BP a copy of BIN
+    and BIN′ = weight · FME + pole · BIN. With ``constant``: rows P … RR from
+    the rows P1 … ONE, ONE copied, NR = −r̂′ and RR = r̂′.
     """
+    if constant:
+        w = np.zeros((RR - P + 1, ONE + 1))
+        w[: SG - P + 1, : SG + 1] = observer_matrix(dt, weight, pole, tau)
+        w[ONE - P, ONE] = 1.0
+        w[NR - P], w[RR - P] = -w[R - P], w[R - P]
+        return w
+    if bins is not None:
+        w = np.zeros((BIN - P + 1, BIN + 1))
+        w[: SG - P + 1, : SG + 1] = observer_matrix(dt, weight, pole, tau)
+        for row, source in ((ONE, ONE), (LO, LO), (HI, HI), (FME, FME), (BP, BIN)):
+            w[row - P, source] = 1.0
+        w[BIN - P, FME], w[BIN - P, BIN] = bins
+        return w
     w = np.zeros((SG - P + 1, SG + 1))
     for out, source in ((P, P1), (VG, C1), (SG0, S1)):
         w[out - P, source] = 1.0
@@ -91,22 +112,39 @@ def friction_basis(observer: Any) -> tuple[Any, str, FloatArray]:
 class Bounds:
     """The bounds of a fitted constant, time-variant or velocity-bin threshold, per sample.
 
-    Constant and time-variant (forms "friction" and "hysteretic"): with the
-    rows x = (r̂, h, filtered τ̂_fr, filtered sign, 1) of the observer block,
-    [L, U, r̂ − U, L − r̂] = S @ (G ∘ x), G the per-joint gains (γ, ε_fr or −c,
-    α or β). A joint not monitored has G = (0, 0, 0, 0, ∞): its bounds are ∓∞
-    and a non-finite filter gives NaN (0 · ∞), as for the others.
+    Time-variant (forms "friction" and "hysteretic"): with the rows x = (r̂, h,
+    filtered τ̂_fr, filtered sign, 1) of the observer block, [L, U, r̂ − U,
+    L − r̂] = S @ (G ∘ x), G the per-joint gains (γ, ε_fr or −c, α). A joint
+    not monitored has G = (0, 0, 0, 0, ∞): its bounds are ∓∞ and a non-finite
+    filter gives NaN (0 · ∞), as for the others. Velocity bins: x = (r̂, h,
+    filtered τ̂_fr, filtered sign, 1, τ_fme filtered up to the last sample,
+    L − c, U − c) with c the bin's centre (this sample's bin entries, by
+    ``lookup_parts``; the observer's product copies them), G = (1, γ, 0, 0, 0,
+    1, 1, 1), (0, …, 0, ∞, 0, 0, 0) for a joint not monitored. The stream reads
+    ``parts``: G, a buffer for G ∘ x, S, the rows S @ (G ∘ x), those of them
+    the verdict's rows L and U (r̂, L, U when every joint is monitored), whether
+    every joint is, and the excursions r̂ − U, L − r̂ as one row. Constant: L
+    and U are constant rows ``low_up`` (−β, β; ∓∞ for a joint not monitored)
+    and the observer's product gives −r̂ and r̂; ``constant_parts``: [−L, U],
+    the excursions [L − r̂, r̂ − U] ([−r̂, r̂] − [−L, U]) and them as one row.
+    ``pair``: the two rows of excursions, for the detector.
     """
 
     def __init__(self, threshold: Any, dt: float, monitored: Any) -> None:
         n = monitored.size
         self.velocity = isinstance(threshold, VelocityThreshold)
+        self.bins: tuple[float, float] | None = None
+        self.bin_gains: tuple[FloatArray, FloatArray] | None = None
         # [r̂, L, U, r̂ − U, L − r̂]; the row r̂ only when every joint is monitored (0 · ∞)
-        sums = [[1, 0, 0, 0, 0], [0, 1, 1, 1, -1], [0, 1, 1, 1, 1], [1, -1, -1, -1, -1],
-                [-1, 1, 1, 1, -1]]  # fmt: skip
+        if self.velocity:  # columns r̂, h, F, SG, 1, last filtered τ_fme, L − c, U − c
+            sums = [[1, 0, 0, 0, 0, 0, 0, 0], [0, 1, 0, 0, -1, 1, 1, 0], [0, 1, 0, 0, 1, 1, 0, 1],
+                    [1, -1, 0, 0, -1, -1, 0, -1], [-1, 1, 0, 0, -1, 1, 1, 0]]  # fmt: skip
+        else:
+            sums = [[1, 0, 0, 0, 0], [0, 1, 1, 1, -1], [0, 1, 1, 1, 1], [1, -1, -1, -1, -1],
+                    [-1, 1, 1, 1, -1]]  # fmt: skip
         self._whole = bool(monitored.all())
         self._sums = np.array(sums if self._whole else sums[1:], dtype=np.float64)
-        gains = np.zeros((5, n))
+        gains = np.zeros((len(sums[0]), n))
         gains[0] = 1.0
         if isinstance(threshold, ConstantThreshold):
             gains[4] = threshold.beta_
@@ -114,21 +152,37 @@ class Bounds:
             gains[1], gains[4] = threshold.gamma_, threshold.alpha_
             hysteretic = threshold.form == "hysteretic"
             gains[3 if hysteretic else 2] = -threshold.c_ if hysteretic else threshold.eps_fr_
+        else:
+            gains[1], gains[5:] = threshold.gamma_, 1.0
+            self._read_bins(threshold, dt, monitored)
         gains[:, ~monitored] = 0.0
         gains[4, ~monitored] = np.inf
-        self._gains, self._scaled = gains, np.empty((5, n))
+        self._gains, self._scaled = gains, np.empty(gains.shape)
         self._rows = np.empty((self._sums.shape[0], n))
         self._excursions = self._rows[-2:].reshape(-1)
-        if self.velocity:
-            self._read_bins(threshold, dt, monitored)
+        self.constant = isinstance(threshold, ConstantThreshold)
+        self.low_up = np.stack([-gains[4], gains[4]])  # the rows LC and UC of the buffers
+        if self.constant:  # [L − r̂, r̂ − U]
+            self._rows = np.empty((2, n))
+            self._excursions = self._rows.reshape(-1)
+        negated = np.stack([-self.low_up[0], self.low_up[1]])
+        self.constant_parts = (negated, self._rows, self._excursions)
+        self.pair = self._rows[-2:]
+        self.parts = (
+            self._gains, self._scaled, self._sums, self._rows,
+            self._rows[:3] if self._whole else self._rows[:2], self._whole, self._excursions,
+        )  # fmt: skip
 
     def _read_bins(self, threshold: VelocityThreshold, dt: float, monitored: Any) -> None:
-        """The bin table by r = searchsorted(edges, q̇, "right") (0 … n_edges), per joint.
+        """The bin table by r = searchsorted(edges, q̇, "right") (0 … n_edges), per joint,
+        and the filter of τ_fme (``first_order``).
 
-        Entry r of joint j's list holds τ_fme, L and U [N m] of its bin clip(r − 1)
-        (``bin_index``), L and U widened by the extrapolation margin where r says
-        q̇ is outside the visited bins (``table_bounds``), and ∓∞ for a joint not
-        monitored.
+        Entry r of joint j holds L and U less the centre, and τ_fme [N m], of its bin
+        clip(r − 1) (``bin_index``), L and U widened by the extrapolation margin where r
+        says q̇ is outside the visited bins (``table_bounds``); zeros for a joint not
+        monitored (its gains make the bounds ∓∞). ``bins``: the filter's weight and pole in
+        the observer's product (1, 0 when the joints' differ: then ``bin_gains``, per joint,
+        after it).
         """
         n = monitored.size
         edges = np.asarray(threshold.bin_edges_, dtype=np.float64)
@@ -142,183 +196,80 @@ class Bounds:
         widen = extra * ((r <= first) | (r >= last + 2)) if extra > 0.0 else 0.0
         table = np.stack(
             [
-                threshold.tau_fme_[bins, joint],
                 threshold.lower_[bins, joint] - widen,
                 threshold.upper_[bins, joint] + widen,
-            ],
-            axis=-1,
-        )  # (n_edges + 1, n_dof, 3)
-        table[:, ~monitored] = (0.0, -np.inf, np.inf)
-        # Python floats: for a handful of joints, a loop over lists costs less than the
-        # dozen small numpy calls of the same arithmetic (same operations, same order).
-        self._edges = edges.tolist()
+                threshold.tau_fme_[bins, joint],
+            ]
+        )  # (3, n_edges + 1, n_dof): the rows LO, HI, FME
+        table[:, :, ~monitored] = 0.0
+        self._edges = edges
+        # column j · (n_edges + 1) + r: the entries of joint j at r (one index for three rows)
+        self._table = np.ascontiguousarray(table.transpose(0, 2, 1)).reshape(3, -1)
+        self._base = np.arange(n) * (edges.size + 1)
+        self._index = np.empty(n, dtype=np.int64)
         step = np.broadcast_to(threshold.gain_, (n,)) * dt  # the filter of first_order
-        gamma = np.where(monitored, threshold.gamma_, 0.0).tolist()
-        rows = [[tuple(row) for row in table[:, j].tolist()] for j in range(n)]
-        # per joint: the filter's pole and weight, γ, and (τ_fme, L, U) by r
-        self._joints = list(
-            zip(np.exp(-step).tolist(), (-np.expm1(-step)).tolist(), gamma, rows, strict=True)
-        )
-
-    def linear(self, s_block: FloatArray, s_rows: FloatArray, out: FloatArray) -> list[float]:
-        """The constant or time-variant bounds: the residual and bounds into ``out`` [N m];
-        returns r̂ − U, then L − r̂, per joint.
-
-        ``s_block`` is the new observer block, ``s_rows`` its rows R … ONE.
-        """
-        _multiply(self._gains, s_rows, out=self._scaled)
-        rows = self._rows
-        _dot(self._sums, self._scaled, out=rows)
-        if self._whole:
-            out[...] = rows[:3]
-        else:
-            out[0] = s_block[R]
-            out[1:] = rows[:2]
-        return self._excursions.tolist()
-
-    def bins(
-        self, filters: list[float], s_block: FloatArray, c_block: FloatArray, start: bool,
-        out: FloatArray,
-    ) -> list[float]:  # fmt: skip
-        """The velocity-bin threshold (``table_bounds``) on the new block, joint by joint:
-        the residual and bounds into ``out`` [N m]; returns r̂ − U, then L − r̂, per joint.
-
-        ``filters`` are the rows R … SG of ``s_block`` as one list, ``c_block`` the
-        committed observer block. The bin is ``bisect_right(edges, q̇)``
-        (``searchsorted(..., "right")``); the filter of τ_fme starts at ``start``
-        (the first sample after the settling window).
-        """
-        n, edges = len(self._joints), self._edges
-        residual = filters[:n]
-        last = [None] * n if start else c_block[BIN].tolist()
-        filtered, lower, upper, above, below = [], [], [], [], []
-        for (pole, weight, gamma, rows), v, r, h, friction in zip(
-            self._joints, s_block[V].tolist(), residual, filters[n : 2 * n], last, strict=True
-        ):
-            fme, low, high = rows[_bisect(edges, v)]
-            if friction is None:
-                friction = fme
-            filtered.append(weight * fme + pole * friction)
-            centre = gamma * h + friction
-            low += centre
-            high += centre
-            lower.append(low)
-            upper.append(high)
-            above.append(r - high)  # no product: 0 · ∞ for a joint not monitored
-            below.append(low - r)
-        s_block[BIN] = filtered
-        out[...] = (residual, lower, upper)
-        above += below
-        return above
+        weight, pole = -np.expm1(-step), np.exp(-step)
+        uniform = bool(np.all(step == step[0]))
+        self.bins = (float(weight[0]), float(pole[0])) if uniform else (1.0, 0.0)
+        self.bin_gains = None if uniform else (weight, pole)
+        self.lookup_parts = (edges, self._base, self._index, self._table)
+        """This sample's bin entries at the velocity v into the rows LO … FME of a block:
+        ``add(edges.searchsorted(v, "right"), base, index)``, then
+        ``table.take(index, 1, rows, "clip")``."""
 
 
-class EventRules:
-    """``Detector._step_checked`` and the latch on the stream's :class:`Flags`.
+def limits_check(limits: Any, check: int) -> tuple[FloatArray, tuple[Any, ...]]:
+    """The centres of the rows q̇, q, τ_m (, τ_J) and their check against ``limits``.
 
-    ``monitored``: the joints watched (0-based); durations [s] already less
-    the Detector's time tolerance; ``release`` NaN for a latch that holds.
+    [−limit, x − centre, limit]: |x − centre| <= limit is one comparison of
+    the first two blocks with the last two (exact: negation is), NaN failing
+    both; all inside when the comparisons' bytes are those of all True
+    (cheaper than a count). Returns the centres (check, n_dof) and (x − centre,
+    first blocks, last blocks, bytes of all True, comparisons).
     """
-
-    def __init__(
-        self, monitored: list[int], min_duration: float, hold: float, release: float
-    ) -> None:
-        self._monitored, self._min_duration, self._hold = monitored, min_duration, hold
-        self._release = release
-
-    def __call__(
-        self, fl: Flags, time: float, excursions: list[float], out: FloatArray,
-        closed: tuple[float, ...],
-    ) -> tuple[int, tuple[float, ...]]:  # fmt: skip
-        """``Detector._step_checked`` and the latch on the flags: (status | mask << 5, event).
-
-        ``excursions`` are r̂ − U then L − r̂ per joint [N m].
-        """
-        n = len(excursions) // 2
-        mask = 0
-        if max(excursions) > 0.0:
-            best, worst = -1, 0.0
-            for j in self._monitored:
-                above, below = excursions[j], excursions[n + j]
-                excursion = above if above > below else below
-                if excursion > 0.0:
-                    mask |= 1 << j
-                if best < 0 or excursion > worst:
-                    best, worst = j, excursion
-            residual = float(out[0, best])
-            if fl.open and (fl.outside or time - fl.open_end < self._hold):
-                fl.open_end = time
-                fl.open_joints |= mask
-                if not worst <= fl.open_peak:
-                    fl.open_peak, fl.open_peak_residual = worst, residual
-            else:
-                closed = self.lasted(fl) or closed
-                fl.open, fl.open_start, fl.open_end = True, time, time
-                fl.open_joints, fl.open_peak, fl.open_peak_residual = mask, worst, residual
-        elif fl.open and time - fl.open_end >= self._hold:
-            closed = self.lasted(fl) or closed
-            fl.open = False
-        fl.outside = mask != 0
-        if mask and fl.open and time - fl.open_start >= self._min_duration:
-            fl.latched, fl.inside_since = True, math.nan
-            return COLLISION | mask << JOINTS_SHIFT, closed
-        if fl.latched and not math.isnan(self._release):
-            if mask:
-                fl.inside_since = math.nan
-            elif math.isnan(fl.inside_since):
-                fl.inside_since = time
-            if time - fl.inside_since >= self._release:
-                fl.latched, fl.inside_since = False, math.nan
-        return (COLLISION if fl.latched else OK) | mask << JOINTS_SHIFT, closed
-
-    def lasted(self, fl: Flags) -> tuple[float, ...]:
-        """The open event's fields if it lasted ``min_duration``, else ()."""
-        if fl.open and fl.open_end - fl.open_start >= self._min_duration:
-            return (fl.open_start, fl.open_end, fl.open_joints, fl.open_peak, fl.open_peak_residual)
-        return ()
+    n = limits.centre.shape[0]
+    centre = np.zeros((check, n))
+    centre[1] = limits.centre
+    limit = np.stack([limits.velocity, limits.half_range, *[limits.torque] * (check - 2)])
+    between = np.stack([-limit, np.zeros_like(limit), limit])
+    inside = np.empty((2, check, n), dtype=bool)
+    return centre, (between[1], between[:2], between[1:], np.ones_like(inside).tobytes(), inside)
 
 
-class Flags:
-    """The stream's scalars: time rules, detector and latch."""
-
-    __slots__ = (
-        "floor", "has_detector", "has_stream", "inside_since", "latched", "open", "open_end",
-        "open_joints", "open_peak", "open_peak_residual", "open_start", "outside", "pending",
-        "start", "t_last",
-    )  # fmt: skip
-
-    def __init__(self) -> None:
-        self.has_stream = self.has_detector = self.latched = self.open = self.outside = False
-        self.start = self.t_last = self.open_start = self.open_end = 0.0
-        self.open_peak = self.open_peak_residual = 0.0
-        self.floor = self.pending = -math.inf
-        self.inside_since = math.nan
-        self.open_joints = 0
-
-    def __copy__(self) -> Flags:
-        new = Flags.__new__(Flags)
-        for name in self.__slots__:
-            setattr(new, name, getattr(self, name))
-        return new
+def start_rows(terms: FloatArray, block: FloatArray, tau: int) -> None:
+    """``MomentumObserver.initial_state`` from the rows P1 … FC of ``terms`` into ``block``
+    (the held torque into the row ``tau``)."""
+    p, vg, sign = terms[P1] - terms[G1], terms[C1] - terms[G1], terms[S1].copy()
+    friction = terms[FA] + terms[FB] + terms[FC]
+    block[P], block[VG], block[FR], block[SG0] = p, vg, friction, sign
+    block[tau], block[R], block[H] = friction - vg, 0.0, -vg
+    block[F], block[SG] = friction, sign
 
 
-def layout(buffer: FloatArray, m: int, check: int) -> tuple[Any, ...]:
-    """Views of a buffer (section states, then the observer block), as :meth:`_step` reads them."""
+def layout(buffer: FloatArray, m: int, check: int, kind: str) -> tuple[Any, ...]:
+    """Views of a buffer (section states, then the observer block), as :meth:`_step` reads them.
+
+    ``kind`` "velocity": the observer's product also writes the rows ONE … BIN, the bounds
+    read R … HI; "constant": the product writes ONE … RR, the bounds read NR … RR and the
+    verdict's rows are RR … UC; else the product writes P … SG, the bounds read R … ONE.
+    """
     block = buffer[m:]
-    return (
+    last, rows = {"velocity": (BIN, (R, HI)), "constant": (RR, (NR, RR))}.get(kind, (SG, (R, ONE)))
+    views = (
         buffer[:m], block[V], block[Q], block[TM], block[TJ], block[V : V + check],
-        block[: SG + 1], block[P : SG + 1], block[R : ONE + 1], block[R : SG + 1].reshape(-1),
-        block, block_views(block),
+        block[RR : UC + 1], block[P : last + 1], block[rows[0] : rows[1] + 1],
+        block[R : SG + 1].reshape(-1), block, block_views(block, kind),
     )  # fmt: skip
+    return (*views, views[1:11])  # the last: the ten a sample unpacks, as one tuple
 
 
-def block_views(block: FloatArray) -> tuple[FloatArray, ...]:
+def block_views(block: FloatArray, kind: str = "") -> tuple[FloatArray, ...]:
     """Rows P1 … VV1, the sign rows S1 … VV1, the friction rows FA … FC, the row FA,
-    the observer's input (P1 … SG) and the block itself."""
+    the bin entries LO … FME, the observer's input (P1 … SG; P1 … BIN for ``kind``
+    "velocity", P1 … ONE for "constant") and the block itself."""
+    last = {"velocity": BIN, "constant": ONE}.get(kind, SG)
     return (
         block[P1], block[C1], block[G1], block[S1], block[SS1], block[VV1],
-        block[S1 : VV1 + 1], block[FA : FC + 1], block[FA], block[: SG + 1], block,
+        block[S1 : VV1 + 1], block[FA : FC + 1], block[FA], block[LO : FME + 1],
+        block[: last + 1], block,
     )  # fmt: skip
-
-
-# Bound once: each module attribute lookup costs as much as a line of arithmetic.
-_multiply, _dot, _bisect = np.multiply, np.dot, bisect_right

@@ -22,10 +22,14 @@ few of them:
 * the observer's update (increments of p, trapezoid of Cᵀq̇ − g and τ̂_fr,
   held τ, the four first-order filters) is one matrix product over the rows
   (this sample's terms, last sample's terms and filter states) when every
-  joint has the same gain;
-* the constant and time-variant bounds (forms "friction" and "hysteretic")
-  and the detector's excursions are one elementwise product and one matrix
-  product.
+  joint has the same gain; the same product gives ±r̂ for the constant bounds,
+  and the filter of τ_fme and copies of this sample's bin entries (one
+  ``searchsorted`` and one ``take``) for the velocity bins;
+* the time-variant bounds (forms "friction" and "hysteretic") and those of
+  the velocity bins, with the detector's excursions, are one elementwise
+  product and one matrix product; the constant ones one subtraction;
+* the detector reads the excursions as one list; a joint outside costs one
+  comparison more (:mod:`._numpy_rules`).
 
 The results equal the compiled stream's to rounding (the sums run in another
 order). Needs no numba. Units SI and radians.
@@ -43,7 +47,6 @@ import pinocchio as pin
 from .._validation import FloatArray
 from ..detection import TIME_TOLERANCE
 from ..filters._sos import sections, sos_sample
-from ..friction.static import Coulomb, CoulombViscous, HystereticError, Viscous
 from ..signals import Event
 from ..thresholds import ConstantThreshold, TimeVariantThreshold, VelocityThreshold
 from ._codes import (
@@ -54,9 +57,6 @@ from ._codes import (
     FAULT_EARLY,
     FAULT_GAP,
     FAULT_OBSERVER,
-    FAULT_Q,
-    FAULT_TAU_J,
-    FAULT_TAU_M,
     FAULT_TIME,
     FAULT_VELOCITY,
     OK,
@@ -68,24 +68,15 @@ from ._codes import (
 )
 from ._numpy_parts import (
     BIN,
-    C1,
-    FA,
-    FB,
-    FC,
-    FR,
-    G1,
+    FME,
+    LC,
     ONE,
-    P1,
-    S1,
     SG,
-    SG0,
     TJ,
     TM,
-    VG,
+    UC,
     Bounds,
-    EventRules,
     F,
-    Flags,
     H,
     P,
     R,
@@ -93,8 +84,11 @@ from ._numpy_parts import (
     block_views,
     friction_basis,
     layout,
+    limits_check,
     observer_matrix,
+    start_rows,
 )  # fmt: skip
+from ._numpy_rules import EventRules, Flags, refused
 
 if TYPE_CHECKING:
     from .stream import CollisionMonitor
@@ -102,7 +96,6 @@ if TYPE_CHECKING:
 __all__ = ["NumpyStream", "unsupported"]
 
 _FAMILIES = (ConstantThreshold, TimeVariantThreshold, VelocityThreshold)
-_BASIS_FRICTION = (Coulomb, Viscous, CoulombViscous, HystereticError)
 
 
 def unsupported(monitor: CollisionMonitor) -> str:
@@ -137,44 +130,41 @@ class NumpyStream(StreamCodes):
         self._scale = np.full(n, float(estimator._scale[1]))  # arrays divide faster than floats
         self._joint = observer.torque == "joint"
         self._tau = TJ if self._joint else TM  # the torque the observer integrates
-        limits = monitor.limits
         check = 4 if self._joint else 3  # rows V … TM (… TJ)
-        self._centre = np.zeros((check, n))
-        self._centre[1] = limits.centre
-        limit = np.stack([limits.velocity, limits.half_range, *[limits.torque] * (check - 2)])
-        # [−limit, x − centre, limit]: |x − centre| <= limit is one comparison of the first two
-        # blocks with the last two (exact: negation is), NaN failing both
-        between = np.stack([-limit, np.zeros_like(limit), limit])
-        inside = np.empty((2, check, n), dtype=bool)
-        self._check = (between[1], between[:2], between[1:], 2 * check * n, inside)
-        uniform = bool(np.all(observer.gain == observer.gain[0]))
-        pole, weight = observer._pole, observer._weight
-        self._observe = observer_matrix(
-            dt, float(weight[0]) if uniform else 1.0, float(pole[0]) if uniform else 0.0, self._tau
-        )
-        self._gains = None if uniform else (weight[None, :].copy(), pole[None, :].copy())
-        self._friction, self._friction_kind, self._basis = friction_basis(observer)
-        model = observer.robot.pinocchio_model
-        self._model, self._data = model, model.createData()
-        self._zero = np.zeros(n)
+        self._centre, self._check = limits_check(monitor.limits, check)
         monitored = np.zeros(n, dtype=bool)
         monitored[np.asarray(detector.monitored_joints) - 1] = True
         self._monitored = np.flatnonzero(monitored).tolist()
-        self._bounds = Bounds(monitor.threshold, dt, monitored)
+        self._bounds = bounds = Bounds(monitor.threshold, dt, monitored)
+        self._velocity, self._constant = bounds.velocity, bounds.constant
+        uniform = bool(np.all(observer.gain == observer.gain[0]))
+        pole, weight = observer._pole, observer._weight
+        kind = "velocity" if bounds.velocity else "constant" if bounds.constant else ""
+        self._observe = observer_matrix(
+            dt, float(weight[0]) if uniform else 1.0, float(pole[0]) if uniform else 0.0, self._tau,
+            bounds.bins, bounds.constant,
+        )  # fmt: skip
+        self._gains = None if uniform else (weight[None, :].copy(), pole[None, :].copy())
+        self._bin_gains = bounds.bin_gains  # per-joint filters after the product
+        self._per_joint = self._gains is not None or self._bin_gains is not None
+        self._friction, self._friction_kind, self._basis = friction_basis(observer)
+        self._friction_on = self._friction_kind != "none"
+        model, self._zero = observer.robot.pinocchio_model, np.zeros(n)
+        self._pin = (model, model.createData(), self._zero)  # rnea, Coriolis and g on one data
         # Durations compared up to the Detector's tolerance on time differences.
         self._early, self._gap = policy.early * dt, policy.gap * dt
         self._settle = monitor.settle - TIME_TOLERANCE
         self._release = math.nan if policy.release is None else policy.release - TIME_TOLERANCE
         self._rules = EventRules(
             self._monitored, detector.min_duration - TIME_TOLERANCE,
-            detector.hold - TIME_TOLERANCE, self._release,
+            detector.hold - TIME_TOLERANCE, self._release, bounds.pair,
         )  # fmt: skip
         self._decode_masks(n)
         m = 2 * sos.shape[0]  # section states, rows 0 … m − 1; the observer block after them
         self._buffers = (np.zeros((m + BIN + 1, n)), np.zeros((m + BIN + 1, n)))
-        self._views = tuple(layout(buffer, m, check) for buffer in self._buffers)
+        self._views = tuple(layout(buffer, m, check, kind) for buffer in self._buffers)
         self._start = np.zeros((BIN + 1, n))  # observer block of a (re)start or second sample
-        self._start_views = block_views(self._start)
+        self._start_views = block_views(self._start, kind)
         self._shape = (n,)
         self.sample = (self._sample_step, None, None)
         """The entry point of the common sample, as the compiled stream's ``sample``:
@@ -189,6 +179,8 @@ class NumpyStream(StreamCodes):
         for block in (*self._buffers, self._start):
             block[:] = 0.0
             block[-BIN - 1 + ONE] = 1.0
+            if self._constant:
+                block[-BIN - 1 + LC : -BIN - 1 + UC + 1] = self._bounds.low_up
         self._committed, self._scratch = self._views
         self._velocity_row = self._scratch[1]
         self._flags = Flags()
@@ -227,56 +219,72 @@ class NumpyStream(StreamCodes):
                 else:
                     time_fault = FAULT_GAP
         committed, scratch = self._committed, self._scratch
-        s_v, s_q, s_tau_m, s_tau_j, s_check, _, s_update, s_rows, s_filters, s_block = scratch[1:11]
+        written = scratch[12]  # the views of the scratch buffer a sample writes
+        s_v, s_q, s_tau_m, s_tau_j, s_check, s_out, s_update, s_rows, s_filters, s_block = written
         if self._backward:  # backward differences: y = q − q_prev
-            _subtract(q, q if restart else committed[2], out=s_v)
+            _subtract(q, q if restart else committed[2], s_v)  # out positional: faster
         else:
             z = self._zi * q if restart else committed[0]  # rows: the sections' two states each
             y, z_next = sos_sample(self._sections, q, z.reshape(-1, 2, q.shape[0]))
             scratch[0][...] = z_next.reshape(z.shape)
             s_v[...] = y
-        _divide(s_v, self._scale, out=s_v)
-        if qd.shape[0]:
+        _divide(s_v, self._scale, s_v)
+        if len(qd):
             s_v[...] = qd  # the measured velocity replaces the estimate
         self._velocity_row = s_v
         s_q[...] = q
         s_tau_m[...] = tau_m
         if self._joint:
             s_tau_j[...] = tau_j
-        difference, low, high, size, inside = self._check
-        _subtract(s_check, self._centre, out=difference)
-        _less_equal(low, high, out=inside)
-        if time_fault or _count(inside) != size:
-            return self._refuse(time, time_fault)
+        difference, low, high, all_inside, inside = self._check
+        _subtract(s_check, self._centre, difference)
+        _less_equal(low, high, inside)
+        if time_fault or inside.tobytes() != all_inside:
+            return refused(fl, inside, time, time_fault)
         fresh = not restart and fl.t_last == fl.start
         views = self._start_views if restart or fresh else committed[11]
         self._terms(q, s_v, views)
         if restart:
-            self._initial(q, qd if qd.shape[0] else self._zero, views[-1])
+            self._initial(q, qd if len(qd) else self._zero, views[-1])
         elif fresh:  # the observer starts at the first velocity estimate
-            self._start_rows(views[-1], views[-1])
-        _dot(self._observe, views[-2], out=s_update)
-        if self._gains is not None:  # per-joint gains: the filters y′ = w · input + a · y
-            weight, pole = self._gains
-            filtered = s_update[R - P :]
-            filtered *= weight
-            filtered += pole * views[-1][R : SG + 1]
+            start_rows(views[-1], views[-1], self._tau)
         settling = time - (time if restart else fl.start) < self._settle
         bounds = self._bounds
-        if settling or bounds.velocity:  # else a non-finite filter shows in the excursions
-            filters = s_filters.tolist()  # r̂, h, filtered τ̂_fr and sign
-            if not math.isfinite(sum(filters)) and not _finite(s_filters).all():
+        if self._velocity and not settling:  # this sample's bin entries (Bounds.lookup_parts)
+            edges, base, index, table = bounds.lookup_parts
+            _add(edges.searchsorted(s_v, "right"), base, index)
+            table.take(index, 1, views[9], "clip")  # positional: faster
+            if restart or not fl.has_detector:  # the filter of τ_fme starts at τ_fme
+                views[-1][BIN] = views[-1][FME]
+            elif fresh:
+                views[-1][BIN] = committed[10][BIN]
+        _dot(self._observe, views[-2], s_update)
+        if self._per_joint:
+            self._per_joint_gains(s_update, s_block, views[-1])
+        if settling:  # else a non-finite filter shows in the excursions
+            if not math.isfinite(sum(s_filters.tolist())) and not _finite(s_filters).all():
                 fl.pending = time
                 return FAULT_OBSERVER
-        if settling:
             out[0] = s_block[R]
             out[1:] = math.nan
-        else:
-            if bounds.velocity:
-                start = restart or not fl.has_detector
-                excursions = bounds.bins(filters, s_block, committed[10], start, out)
+        elif self._constant:  # [−r̂, r̂] − [−L, U]; the verdict's rows r̂, L, U are the block's
+            negated, pair, flat = bounds.constant_parts
+            _subtract(s_rows, negated, pair)
+            out[...] = s_out
+            excursions = flat.tolist()  # L − r̂, then r̂ − U, per joint
+            if not sum(excursions) < math.inf:  # NaN or +∞ only from a non-finite r̂
+                fl.pending = time
+                return FAULT_OBSERVER
+        else:  # S @ (G ∘ x) of Bounds; the verdict's rows and the excursions
+            gains, scaled, sums, rows, bounds_rows, whole, flat = bounds.parts
+            _multiply(gains, s_rows, scaled)
+            _dot(sums, scaled, rows)
+            if whole:
+                out[...] = bounds_rows
             else:
-                excursions = bounds.linear(s_block, s_rows, out)
+                out[0] = s_block[R]
+                out[1:] = bounds_rows
+            excursions = flat.tolist()  # r̂ − U, then L − r̂, per joint
             total = sum(excursions)  # NaN or +inf: a non-finite filter or bound
             if not total < math.inf:
                 if not _finite(s_filters).all():
@@ -296,8 +304,9 @@ class NumpyStream(StreamCodes):
         else:
             if not fl.has_detector:
                 fl.has_detector, fl.outside, fl.open = True, False, False
-            if fl.open or max(excursions) > 0.0 or (fl.latched and self._release == self._release):
-                code, closed = self._rules(fl, time, excursions, out, closed)
+            worst = max(excursions)
+            if worst > 0.0 or fl.open or (fl.latched and self._release == self._release):
+                code, closed = self._rules(fl, time, worst, excursions, out, closed)
             else:  # inside the bounds, nothing open, no release to watch
                 fl.outside = False
                 code = COLLISION if fl.latched else OK
@@ -306,6 +315,21 @@ class NumpyStream(StreamCodes):
         self._committed, self._scratch = scratch, committed
         self._closed = closed
         return code | EVENT if closed else code
+
+    def _per_joint_gains(
+        self, s_update: FloatArray, s_block: FloatArray, block: FloatArray
+    ) -> None:
+        """The filters y′ = w · input + a · y of per-joint gains (the product gave the inputs):
+        the observer's (rows R … SG) and the bins' (BIN) when not all joints have the same."""
+        if self._gains is not None:
+            weight, pole = self._gains
+            filtered = s_update[R - P : SG - P + 1]
+            filtered *= weight
+            filtered += pole * block[R : SG + 1]
+        if self._bin_gains is not None:
+            weight, pole = self._bin_gains
+            s_block[BIN] *= weight
+            s_block[BIN] += pole * block[BIN]
 
     def _sample_step(
         self, time: float, q: Any, tau_m: Any, tau_j: Any, model: Any, buffers: Any, out: FloatArray
@@ -318,6 +342,12 @@ class NumpyStream(StreamCodes):
         motor-torque observer); the caller's checks then say why.
         """
         shape = self._shape
+        if (
+            tau_j is tau_m and type(q) is _ndarray and type(tau_m) is _ndarray
+            and q.dtype is _FLOAT and tau_m.dtype is _FLOAT and q.shape == shape == tau_m.shape
+            and q.strides == _STRIDES == tau_m.strides and time - time == 0.0
+        ):  # fmt: skip
+            return self._step(time, q, _EMPTY, tau_m, tau_j, out)  # the common sample
         for x in (q, tau_m) if tau_j is tau_m else (q, tau_m, tau_j):
             # ``is`` first: an unpickled array's dtype is an equal copy, not the same object
             if not (
@@ -329,59 +359,33 @@ class NumpyStream(StreamCodes):
             return UNJUDGED
         return self._step(time, q, _EMPTY, tau_m, tau_j, out)
 
-    def _refuse(self, time: float, time_fault: int) -> int:
-        """The fault of a sample outside the limits or the time rules, in the kernel's order."""
-        fl = self._flags
-        inside = self._check[4]  # both comparisons, rows q̇, q, τ_m(, τ_J)
-        rows = [bool(inside[:, row].all()) for row in range(inside.shape[1])]
-        for row, code in zip(rows[1:], (FAULT_Q, FAULT_TAU_M, FAULT_TAU_J), strict=False):
-            if not row:
-                fl.pending = time
-                return code
-        if time_fault:
-            if time_fault == FAULT_GAP:
-                fl.pending = time
-            return time_fault
-        fl.pending = time
-        return FAULT_VELOCITY
-
     def _terms(self, q: FloatArray, v: FloatArray, views: tuple[FloatArray, ...]) -> None:
         """p + g, Cᵀq̇, g, sign and the friction rows at (q, ``v``) into the rows P1 … FC.
 
         ``views`` are those of an observer block (:func:`_block_views`).
         """
-        p, coriolis, gravity, sign = views[:4]
-        model, data = self._model, self._data
-        p[...] = _rnea(model, data, q, self._zero, v)
-        _dot(v, _coriolis(model, data, q, v), out=coriolis)
-        gravity[...] = _gravity(model, data, q)
-        _sign(v, out=sign)
-        if self._friction_kind != "none":
+        model, data, zero = self._pin
+        views[0][...] = _rnea(model, data, q, zero, v)  # p + g
+        _dot(_coriolis(model, data, q, v).T, v, views[1])
+        views[2][...] = _gravity(model, data, q)
+        _sign(v, views[3])
+        if self._friction_on:
             self._friction_rows(v, views)
 
     def _friction_rows(self, v: FloatArray, views: tuple[FloatArray, ...]) -> None:
         """The rows FA … FC (their sum is τ̂_fr(``v``)) and the sign² and q̇ rows they use."""
-        sign, square, velocity, basis, friction, first = views[3:9]
-        if self._friction_kind == "basis":
-            _multiply(sign, sign, out=square)
-            velocity[...] = v
-            _multiply(basis, self._basis, out=friction)
+        if self._friction_kind == "basis":  # views: sign, sign², q̇, the basis, the friction rows
+            _multiply(views[3], views[3], views[4])
+            views[5][...] = v
+            _multiply(views[6], self._basis, views[7])
         elif self._friction_kind == "model":
-            first[...] = self._friction(v)
+            views[8][...] = self._friction(v)
 
     def _initial(self, q: FloatArray, v: FloatArray, block: FloatArray) -> None:
         """The observer's state at a (re)start at (q, ``v``) into the rows P … SG of ``block``."""
         terms = np.zeros_like(block)
         self._terms(q, v, block_views(terms))
-        self._start_rows(terms, block)
-
-    def _start_rows(self, terms: FloatArray, block: FloatArray) -> None:
-        """``MomentumObserver.initial_state`` from the rows P1 … FC of ``terms``, into ``block``."""
-        p, vg, sign = terms[P1] - terms[G1], terms[C1] - terms[G1], terms[S1].copy()
-        friction = terms[FA] + terms[FB] + terms[FC]
-        block[P], block[VG], block[FR], block[SG0] = p, vg, friction, sign
-        block[self._tau], block[R], block[H] = friction - vg, 0.0, -vg
-        block[F], block[SG] = friction, sign
+        start_rows(terms, block, self._tau)
 
     # ------------------------------------------------------------------ interface
     def run(
@@ -487,7 +491,7 @@ class NumpyStream(StreamCodes):
 
 
 # Bound once: each module attribute lookup costs as much as a line of arithmetic.
-_subtract, _divide, _less_equal, _count = np.subtract, np.divide, np.less_equal, np.count_nonzero
+_subtract, _divide, _less_equal, _add = np.subtract, np.divide, np.less_equal, np.add
 _multiply, _dot, _sign = np.multiply, np.dot, np.sign
 _finite, _isnan = np.isfinite, np.isnan
 _ndarray, _FLOAT, _STRIDES, _EMPTY = np.ndarray, np.dtype(np.float64), (8,), np.empty(0)

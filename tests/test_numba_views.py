@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from sensorless.robots.recursion import numba_available
 
@@ -67,3 +69,35 @@ def test_a_view_of_the_wrong_size_raises(kernels) -> None:
     flat = np.zeros(10)
     with pytest.raises(ValueError, match="size differs"):
         two(flat, 8, 2, 2)  # the slice holds 2 items, not 4
+
+
+@pytest.fixture(scope="module")
+def any_view():
+    """A compiled view of ``flat[start:start + size]`` with shape (a, b, c)."""
+    from numba import njit
+
+    from sensorless.robots._numba_views import view
+
+    @njit
+    def three(flat, start, shape):
+        a, b, c = shape
+        return view(flat[start : start + a * b * c], (a, b, c))
+
+    return three
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    shape=st.tuples(*[st.integers(0, 6)] * 3),
+    start=st.integers(0, 10),
+    read_only=st.booleans(),
+)
+def test_any_view_is_numpys_reshape(any_view, shape, start, read_only) -> None:
+    flat = np.arange(start + int(np.prod(shape)) + 3, dtype=np.float64)
+    flat.setflags(write=not read_only)
+    got = any_view(flat, start, shape)
+    expected = flat[start : start + int(np.prod(shape))].reshape(shape)
+    np.testing.assert_array_equal(got, expected)
+    assert got.shape == expected.shape and got.flags.writeable == (not read_only)
+    if got.size:
+        assert got.strides == expected.strides and np.shares_memory(got, flat)

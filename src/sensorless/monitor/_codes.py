@@ -15,6 +15,7 @@ without it.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, ClassVar
@@ -50,6 +51,7 @@ __all__ = [
     "StreamCodes",
     "event_of",
     "joints",
+    "name_of",
     "refusal",
 ]
 
@@ -82,13 +84,21 @@ def joints(mask: int) -> tuple[int, ...]:
     return tuple(j + 1 for j in range(mask.bit_length()) if mask >> j & 1)
 
 
+def name_of(status: int) -> str:
+    """A status (``code & 15``) by name: "ok", "collision", "settling", what a fault
+    refused (an entry of ``REASONS``), or "unjudged"."""
+    if status == UNJUDGED:
+        return "unjudged"
+    return STATUSES[status] if status < FAULT else REASONS[status - FAULT]
+
+
 def event_of(fields: tuple[float, ...] | list[float], method: str) -> Event:
     """An event from its (start, end, joints mask, peak, peak residual)."""
     start, end, mask, peak, peak_residual = fields
     return Event(start, end, joints(int(mask)), peak, peak_residual, method)
 
 
-class StreamCodes:
+class StreamCodes(ABC):
     """The codes of the compiled and the numpy streams, and their reading.
 
     ``FAULT``, ``SETTLING`` and ``UNJUDGED`` are status codes (``code & 15``),
@@ -109,9 +119,9 @@ class StreamCodes:
         mask = code >> JOINTS_SHIFT
         return joints(mask) if self._masks is None else self._masks[mask]
 
+    @abstractmethod
     def closed(self, method: str) -> Event:
         """The event that closed at the last sample run (its code has ``EVENT``)."""
-        raise NotImplementedError
 
     @staticmethod
     def reason(status: int) -> str:
@@ -124,9 +134,9 @@ class StreamCodes:
         at the sample (found by ``method``), if any."""
         status = code & 15
         if status >= FAULT:
-            return REASONS[status - FAULT], (), None
+            return name_of(status), (), None
         event = self.closed(method) if code & EVENT else None
-        return STATUSES[status], self.joints(code), event
+        return name_of(status), self.joints(code), event
 
 
 @dataclass(frozen=True)
@@ -186,7 +196,4 @@ class CompiledStep:
         """The status of ``code`` as :class:`~sensorless.detection.Verdict` names it ("ok",
         "collision", "settling"), what a fault refused (an entry of ``REASONS``), or
         "unjudged"."""
-        status = code & 15
-        if status == UNJUDGED:
-            return "unjudged"
-        return STATUSES[status] if status < FAULT else REASONS[status - FAULT]
+        return name_of(code & 15)

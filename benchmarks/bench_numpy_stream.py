@@ -12,7 +12,10 @@ The machine may be shared and noisy: the variants are interleaved sample by
 sample (floor, numpy step, Python step of sample k, then sample k + 1), in an
 order that rotates from repeat to repeat; each figure is the median over the
 repeats of the median over the samples, and "(per run)" the median over the
-repeats of the ratio numpy / floor within one repeat. Run on one thread::
+repeats of the ratio numpy / floor within one repeat. The Python step between
+them leaves the caches colder for both; "(no python)" is the same ratio from a
+second pass per repeat that interleaves only the floor and the numpy step, the
+stricter comparison. Run on one thread::
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/bench_numpy_stream.py
 """
@@ -77,8 +80,10 @@ def numpy_monitor(robot: Any, threshold: Any, settings: Any) -> CollisionMonitor
 
 def main() -> None:
     print(f"median of {REPEATS} runs (each the median over ~{SAMPLES - 250} steps), µs per sample")
-    print(f"{'robot':<16}{'family':<14}{'floor':>8}{'numpy':>9}{'python':>9}"
-          f"{'numpy/floor':>13}{'(per run)':>13}{'python/floor':>14}")  # fmt: skip
+    print(
+        f"{'robot':<16}{'family':<14}{'floor':>8}{'numpy':>9}{'python':>9}"
+        f"{'numpy/floor':>13}{'(per run)':>13}{'(no python)':>13}{'python/floor':>14}"
+    )
     for name in SCENARIOS:
         scenario = load_scenario(name).with_duration(8.0)  # as benchmarks/bench_monitor.py
         free = [scenario.run(seed=s, collisions=False).log for s in (1, 2)]
@@ -95,18 +100,23 @@ def main() -> None:
             }
             names = ["floor", "numpy", "python"]
             medians: dict[str, list[float]] = {key: [] for key in names}
-            ratios = []
+            ratios, strict = [], []
+            numpy_only = {"numpy": monitors["numpy"]}
             for repeat in range(REPEATS):
                 order = names[repeat % 3 :] + names[: repeat % 3]  # rotated each repeat
                 run = interleaved(monitors, nominal.pinocchio_model, (t, q, qd, tau), order)
                 for key in names:
                     medians[key].append(run[key])
                 ratios.append(run["numpy"] / run["floor"])
+                pair = ["floor", "numpy"][repeat % 2 :] + ["floor", "numpy"][: repeat % 2]
+                run = interleaved(numpy_only, nominal.pinocchio_model, (t, q, qd, tau), pair)
+                strict.append(run["numpy"] / run["floor"])
             floor, fast, slow = (1e6 * statistics.median(medians[key]) for key in names)
             ratio = statistics.median(ratios)
             print(
                 f"{name:<16}{method:<14}{floor:>8.2f}{fast:>9.2f}{slow:>9.2f}"
-                f"{fast / floor:>13.2f}{ratio:>13.2f}{slow / floor:>14.2f}"
+                f"{fast / floor:>13.2f}{ratio:>13.2f}{statistics.median(strict):>13.2f}"
+                f"{slow / floor:>14.2f}"
             )
             sys.stdout.flush()
 

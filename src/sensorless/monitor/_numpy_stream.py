@@ -258,7 +258,7 @@ class NumpyStream(StreamCodes):
                 views[-1][BIN] = views[-1][FME]
             elif fresh:
                 views[-1][BIN] = committed[10][BIN]
-        _dot(self._observe, views[-2], s_update)
+        self._observe.dot(views[-2], s_update)  # the method: no dispatch
         if self._per_joint:
             self._per_joint_gains(s_update, s_block, views[-1])
         if settling:  # else a non-finite filter shows in the excursions
@@ -278,7 +278,7 @@ class NumpyStream(StreamCodes):
         else:  # S @ (G ∘ x) of Bounds; the verdict's rows and the excursions
             gains, scaled, sums, rows, bounds_rows, whole, flat = bounds.parts
             _multiply(gains, s_rows, scaled)
-            _dot(sums, scaled, rows)
+            sums.dot(scaled, rows)
             if whole:
                 out[...] = bounds_rows
             else:
@@ -366,7 +366,7 @@ class NumpyStream(StreamCodes):
         """
         model, data, zero = self._pin
         views[0][...] = _rnea(model, data, q, zero, v)  # p + g
-        _dot(_coriolis(model, data, q, v).T, v, views[1])
+        _coriolis(model, data, q, v).T.dot(v, views[1])
         views[2][...] = _gravity(model, data, q)
         _sign(v, views[3])
         if self._friction_on:
@@ -492,7 +492,7 @@ class NumpyStream(StreamCodes):
 
 # Bound once: each module attribute lookup costs as much as a line of arithmetic.
 _subtract, _divide, _less_equal, _add = np.subtract, np.divide, np.less_equal, np.add
-_multiply, _dot, _sign = np.multiply, np.dot, np.sign
+_multiply, _sign = np.multiply, np.sign
 _finite, _isnan = np.isfinite, np.isnan
 _ndarray, _FLOAT, _STRIDES, _EMPTY = np.ndarray, np.dtype(np.float64), (8,), np.empty(0)
 _rnea, _coriolis, _gravity = pin.rnea, pin.computeCoriolisMatrix, pin.computeGeneralizedGravity

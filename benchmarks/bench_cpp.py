@@ -20,7 +20,9 @@ at the flange as :func:`sensorless.robots.load` builds them), this script
    exits 1 if not;
 4. times, in the same process and on the same motion (torques without the
    pulse: free motion, no detection), the three Pinocchio calls in a Python
-   loop, ``MomentumTerms.terms_one`` (numba) in a Python loop, the fused
+   loop, the numpy stream's ``CollisionMonitor.step`` and its batch
+   ``CollisionMonitor.run`` over arrays (``backend="numpy"``, what runs without
+   numba), ``MomentumTerms.terms_one`` (numba) in a Python loop, the fused
    stream step ``CollisionMonitor.step`` (numba, time-variant threshold), the
    same step called from a numba-compiled loop
    (``CollisionMonitor.compiled_step``),
@@ -32,7 +34,8 @@ Every figure is a loop over all samples divided by their number [µs per
 sample], one thread: the median over ``--rounds`` rounds, each of which runs
 the C++ binary and then the Python loops, of the median of ``--repeat`` loops;
 the ratios of the fused step (from Python and from a compiled loop) to
-ext_observer's are taken per round, then their median. Without g++, the headers or the
+ext_observer's, and of the numpy step to the three calls in a Python loop,
+are taken per round, then their median. Without g++, the headers or the
 libraries, it says what is missing and exits 0. The headers the wheels leave
 out are two header-only wheels: ``pip install cmeel-eigen cmeel-urdfdom-headers``.
 
@@ -61,6 +64,7 @@ import time
 import xml.etree.ElementTree as ET
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import pinocchio as pin
@@ -73,6 +77,9 @@ from sensorless.robots.builders import _prune_urdf
 from sensorless.robots.builtin import panda_urdf_path, ur_urdf_path
 from sensorless.robots.recursion import MomentumTerms, numba_available
 from sensorless.trajectories import RandomPointToPoint
+
+if TYPE_CHECKING:
+    from sensorless.monitor._fused import FusedStream
 
 HERE = Path(__file__).resolve().parent / "cpp"
 SOURCE = HERE / "observer_bench.cpp"
@@ -103,6 +110,10 @@ UPDATE = "C++ (b) standard calls + observer update"
 EXT = "C++ (c) ext_observer MomentumObserver on the standard calls"
 STEP = "numba: CollisionMonitor.step (fused stream step)"
 LOOP = "numba: the same step in a compiled loop (compiled_step)"
+PINOCCHIO = "Python: the three Pinocchio calls, loop"
+NUMPY_STEP = "numpy: CollisionMonitor.step (numpy stream)"
+# the per-round ratios printed under the table: a row over its reference row
+RATIOS = {STEP: EXT, LOOP: EXT, NUMPY_STEP: PINOCCHIO}
 
 
 # ---------------------------------------------------------------- build
@@ -284,9 +295,24 @@ def python_loops(
             pin.computeCoriolisMatrix(model, data, q[k], qd[k])
             pin.computeGeneralizedGravity(model, data, q[k])
 
-    loops: dict[str, Callable[[], object]] = {
-        "Python: the three Pinocchio calls, loop": pinocchio_loop
-    }
+    loops: dict[str, Callable[[], object]] = {PINOCCHIO: pinocchio_loop}
+    free = Log(t[: n // 2], q[: n // 2], tau_m=tau_free[: n // 2])
+    settings = ObserverSettings(gain=GAIN)
+    threshold, settings = tune([free], robot, "time-variant", settings, margin=0.05, folds=None)
+    stream = list(zip(t.tolist(), q, tau_free, strict=True))
+    log = Log(t, q, tau_m=tau_free)
+
+    def stepping(monitor: CollisionMonitor) -> Callable[[], None]:
+        def step_loop() -> None:
+            monitor.reset()
+            for tk, qk, tauk in stream:
+                monitor.step(tk, qk, tauk)
+
+        return step_loop
+
+    numpy_monitor = CollisionMonitor(robot, threshold, settings, backend="numpy")
+    loops[NUMPY_STEP] = stepping(numpy_monitor)
+    loops["numpy: CollisionMonitor.run (batch over arrays)"] = lambda: numpy_monitor.run(log)
     if not numba_available():
         return loops
     terms = MomentumTerms(model, backend="numba")
@@ -298,18 +324,8 @@ def python_loops(
             terms.terms_one(qk, qdk, out)
 
     loops["numba: MomentumTerms.terms_one, Python loop"] = terms_loop
-    free = Log(t[: n // 2], q[: n // 2], tau_m=tau_free[: n // 2])
-    settings = ObserverSettings(gain=GAIN)
-    threshold, settings = tune([free], robot, "time-variant", settings, margin=0.05, folds=None)
     monitor = CollisionMonitor(robot, threshold, settings, backend="numba")
-    stream = list(zip(t.tolist(), q, tau_free, strict=True))
-
-    def step_loop() -> None:
-        monitor.reset()
-        for tk, qk, tauk in stream:
-            monitor.step(tk, qk, tauk)
-
-    loops[STEP] = step_loop
+    loops[STEP] = stepping(monitor)
     user_loop, codes = compiled_loop(), np.zeros(n, dtype=np.int64)
 
     def step_in_a_compiled_loop() -> None:
@@ -318,11 +334,9 @@ def python_loops(
 
     loops[LOOP] = step_in_a_compiled_loop
     loops["numba: MomentumTerms.terms, whole array"] = lambda: terms.terms(q, qd)
-    log = Log(t, q, tau_m=tau_free)
     loops["numba: CollisionMonitor.run (fused batch, by phases)"] = lambda: monitor.run(log)
     columns = (t, (q, np.empty((n, 0)), tau_free, tau_free))
-    fused = monitor._fused
-    assert fused is not None
+    fused = cast("FusedStream", monitor._fused)
     loops["numba: the same batch, every sample by the step's kernel"] = lambda: fused.block(
         *columns, "batch", 0
     )
@@ -340,7 +354,7 @@ def compiled_loop() -> Callable[..., None]:
         for k in range(t.shape[0]):
             codes[k] = function(t[k], q[k], tau[k], tau[k], model, buffers, out)
 
-    return loop  # type: ignore[no-any-return]
+    return loop
 
 
 def residual_check(
@@ -390,7 +404,7 @@ def robot_column(
     np.savetxt(samples, np.hstack([q, qd, tau]), fmt="%.17g", delimiter=",", header=header)
     loops = python_loops(robot, t, q, qd, tau_free)
     per_round: dict[str, list[float]] = {}
-    ratios: dict[str, list[float]] = {STEP: [], LOOP: []}
+    ratios: dict[str, list[float]] = {label: [] for label in RATIOS}
     ok = True
     for index in range(rounds):
         times, checks = run_cpp(urdf, samples, repeat)
@@ -403,8 +417,8 @@ def robot_column(
         for label, cost in row.items():
             per_round.setdefault(label, []).append(cost)
         for label, ratio in ratios.items():
-            if EXT in row and label in row:
-                ratio.append(row[label] / row[EXT])
+            if RATIOS[label] in row and label in row:
+                ratio.append(row[label] / row[RATIOS[label]])
     column = {label: statistics.median(costs) for label, costs in per_round.items()}
     return f"{name} ({robot.n_dof} dof)", column, ratios, ok
 
@@ -454,8 +468,9 @@ def print_table(
         for label, per_round in ratios[n].items():
             if per_round:
                 each = " ".join(f"{r:.2f}" for r in per_round)
+                reference = "ext_observer step" if RATIOS[label] == EXT else "three calls"
                 print(
-                    f"{n}: {label.removeprefix('numba: ')} / ext_observer step = "
+                    f"{n}: {label} / {reference} = "
                     f"{statistics.median(per_round):.2f} (median; per round {each})"
                 )
 

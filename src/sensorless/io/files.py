@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import pandas as pd
 
 from .._version import __version__
-from ..exceptions import InputValueError, LogFormatError
+from ..exceptions import DimensionError, InputValueError, LogFormatError, MissingFileError
 from .columns import UNITS, abbreviate
 from .log import Log
 from .validate import TableChecks
@@ -133,6 +133,10 @@ def _read_sidecar(path: Path) -> dict[str, Any] | None:
     return sidecar
 
 
+def _listed(columns: Any) -> str:
+    return abbreviate(columns) if isinstance(columns, list) else repr(columns)
+
+
 def read_log(
     path: str | Path,
     n_dof: int | None = None,
@@ -170,8 +174,8 @@ def read_log(
         with the table (``n_dof``, ``columns``).
     DimensionError
         ``n_dof`` differs from the joint count of the log.
-    FileNotFoundError
-        ``path`` does not exist.
+    MissingFileError
+        ``path`` does not exist (a ``FileNotFoundError``).
     """
     path = Path(path)
     sidecar = _read_sidecar(path)
@@ -187,16 +191,23 @@ def read_log(
             f"suffixes are {sorted(_SUFFIXES)}, or pass format= one of {list(FORMATS)}"
         )
     if not path.exists():
-        raise FileNotFoundError(f"log file {path} does not exist")
+        raise MissingFileError(f"log file {path} does not exist")
     try:
         if fmt == "parquet":
             table = pd.read_parquet(path, engine="pyarrow")
         else:
             table = pd.read_csv(path, **_CSV_READ_OPTIONS)
-    except ValueError as exc:
-        raise LogFormatError(f"cannot read {path} as {fmt}: {exc}") from None
+    except (ValueError, OSError) as exc:
+        if isinstance(exc, OSError) and exc.errno is not None:
+            raise  # the system's error (permissions, a folder, ...), not the content's
+        # pyarrow reports a corrupt Parquet file as an OSError without errno.
+        reason = " ".join(str(exc).split())
+        raise LogFormatError(f"cannot read {path} as {fmt}: {reason}") from None
     metadata = sidecar.get("metadata", {}) if sidecar is not None else {}
-    log = Log.from_pandas(table, metadata, n_dof, **checks)
+    try:
+        log = Log.from_pandas(table, metadata, n_dof, **checks)
+    except (LogFormatError, DimensionError) as exc:
+        raise type(exc)(f"{path}: {exc}") from None
     if sidecar is not None:
         meta_path = sidecar_path(path)
         if "n_dof" in sidecar and sidecar["n_dof"] != log.n_dof:
@@ -204,9 +215,9 @@ def read_log(
                 f"sidecar {meta_path} says n_dof = {sidecar['n_dof']!r}, but the table "
                 f"{path} has {log.n_dof} joints"
             )
-        if "columns" in sidecar and list(sidecar["columns"]) != list(table.columns):
+        if "columns" in sidecar and sidecar["columns"] != list(table.columns):
             raise LogFormatError(
-                f"sidecar {meta_path} lists columns {abbreviate(list(sidecar['columns']))}, "
+                f"sidecar {meta_path} lists columns {_listed(sidecar['columns'])}, "
                 f"but the table {path} has {abbreviate(list(table.columns))}"
             )
     return log

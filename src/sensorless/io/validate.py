@@ -144,6 +144,8 @@ def as_float_column(name: str, values: ArrayLike) -> FloatArray:
         else:
             try:
                 number = float(value)
+            except OverflowError:  # an integer beyond the float range: refused as not finite
+                number = math.inf if value > 0 else -math.inf
             except (TypeError, ValueError):
                 number = None
         if number is None:
@@ -197,11 +199,13 @@ def _check_time(t: FloatArray, check_regular: bool, rtol: float) -> None:
 
 
 def _check_collision_id(values: FloatArray) -> None:
-    bad = np.flatnonzero((values < 0.0) | (values != np.round(values)))
+    # Up to 2**53: a float holds every integer up to there, and int64 overflows not far beyond.
+    bad = np.flatnonzero((values < 0.0) | (values > 2.0**53) | (values != np.round(values)))
     if bad.size:
         row = int(bad[0])
         raise LogFormatError(
-            "column 'collision_id' must hold non-negative integers (0 = no collision); "
+            "column 'collision_id' must hold non-negative integers (0 = no collision) up to "
+            "2**53; "
             f"row {row} holds {show_value(values[row])}"
         )
 

@@ -54,6 +54,7 @@ from typing import Any
 
 from ...exceptions import InputTypeError, UnknownNameError
 from ..log import Log
+from ._pipeline import Timebase
 from .franka import FRANKA_COLUMNS, import_franka
 from .mapping import CsvSpec, available_csv_specs, import_csv, load_csv_spec
 from .ros2 import import_ros2
@@ -127,7 +128,12 @@ def import_log(format: str, paths: str | Path | Sequence[str | Path], **options:
             f"unknown import format {format!r}; formats: {list(IMPORT_FORMATS)} (a log "
             "already in the sensorless format is read with sensorless.io.read_log)"
         )
-    valid = [name for name in inspect.signature(importer).parameters if name != "path"]
+    valid = []
+    for name, parameter in inspect.signature(importer).parameters.items():
+        if parameter.kind is inspect.Parameter.VAR_KEYWORD:
+            valid.extend(sorted(Timebase.__optional_keys__))  # **timebase: dt, gap_tolerance
+        elif name != "path":
+            valid.append(name)
     unknown = sorted(set(options) - set(valid))
     if unknown:
         raise InputTypeError(

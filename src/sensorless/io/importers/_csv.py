@@ -23,6 +23,7 @@ import pandas as pd
 
 from ..._validation import FloatArray
 from ...exceptions import InputValueError, LogFormatError
+from ..columns import abbreviate, show_value
 from ._pipeline import ColumnKind, Recording, RowBuffer, checked_column
 
 __all__ = [
@@ -236,9 +237,14 @@ def _chunks(path: Path, layout: CsvLayout, sep: str) -> Iterator[pd.DataFrame]:
         options["sep"] = sep
     try:
         with pd.read_csv(path, **options) as reader:
-            yield from reader
+            for chunk in reader:
+                if layout.header:
+                    # As read_header names them: the parser keeps the spaces after a name.
+                    chunk.columns = [str(name).strip() for name in chunk.columns]
+                yield chunk
     except (ValueError, pd.errors.ParserError) as exc:
-        raise LogFormatError(f"{path}: cannot be parsed as CSV: {exc}") from None
+        reason = " ".join(str(exc).split())
+        raise LogFormatError(f"{path}: cannot be parsed as CSV: {reason}") from None
 
 
 def _column(
@@ -251,6 +257,12 @@ def _column(
 ) -> FloatArray:
     """One column of a chunk, checked, times ``scale`` (checked again if an angle)."""
     label = column_label(key)
+    if key not in chunk.columns:
+        # The first line split one way, the parser another (quotes, stray spaces).
+        raise LogFormatError(
+            f"{path}: the CSV parser finds no {label} (delimiter and quotes as read: columns "
+            f"{abbreviate(list(chunk.columns))}); check the first line"
+        )
     values = checked_column(
         chunk[key].to_numpy(),
         source=path,
@@ -260,10 +272,30 @@ def _column(
     )
     if scale == 1.0:
         return values
-    values = values * scale
+    with np.errstate(over="ignore"):  # refused, naming the row, below
+        scaled = values * scale
+    beyond = np.flatnonzero(~np.isfinite(scaled))
+    if beyond.size:
+        row = int(beyond[0])
+        raise LogFormatError(
+            f"{path}: {label}, row {first_row + row}: holds {show_value(values[row])}, which "
+            f"times its factor {scale:g} (unit or gain) is beyond the range of a float"
+        )
+    values = scaled
     if kind == "angle":
         checked_column(values, source=path, column=label, first_row=first_row, kind="angle")
     return values
+
+
+def _check_span(path: Path, key: ColumnKey, t: FloatArray, first_row: int) -> None:
+    """Time from the first row must be finite: 1e308 after -1e308 is not."""
+    bad = np.flatnonzero(~np.isfinite(t))
+    if bad.size:
+        row = int(bad[0])
+        raise LogFormatError(
+            f"{path}: {column_label(key)}, row {first_row + row}: is {show_value(t[row])} s from "
+            "row 0, beyond the range of a float; time stamps must be finite and comparable"
+        )
 
 
 def _row_estimate(path: Path) -> int:
@@ -318,7 +350,9 @@ def read_recording(path: Path, layout: CsvLayout, kinds: dict[str, ColumnKind]) 
         rows = buffer.take(len(chunk))
         # Measured from the first row before scaling: exact for integer stamps (ms or ns
         # since 1970), which seconds since 1970 in float64 are not.
-        rows["t"][:] = (raw - origin) * layout.time_scale
+        with np.errstate(over="ignore"):  # an overflow is refused, naming the row, below
+            rows["t"][:] = (raw - origin) * layout.time_scale
+        _check_span(path, layout.time, rows["t"], first_row)
         for group, keys in layout.groups.items():
             scales = layout.scales.get(group, np.ones(len(keys)))
             kind = kinds.get(group, "value")

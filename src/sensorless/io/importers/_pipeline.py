@@ -189,12 +189,32 @@ def _problem(source: Path, column: str, row: int, text: str) -> LogFormatError:
     return LogFormatError(f"{source}: {column}, row {row}: {text}")
 
 
+def _as_float_one_by_one(
+    values: NDArray[Any], source: Path, column: str, first_row: int
+) -> FloatArray:
+    """As :func:`_as_float`, value by value: an integer beyond the float range is named."""
+    numbers = np.empty(values.shape, dtype=np.float64)
+    for row, value in enumerate(values.tolist()):
+        try:
+            numbers[row] = float(value)
+        except OverflowError:
+            raise _problem(
+                source, column, first_row + row, f"holds {value!r}, beyond the range of a float"
+            ) from None
+        except (TypeError, ValueError):
+            numbers[row] = math.nan
+    return numbers
+
+
 def _as_float(values: NDArray[Any], source: Path, column: str, first_row: int) -> FloatArray:
     if values.dtype.kind in "iuf":
         return values.astype(np.float64, copy=False)
     if values.dtype.kind == "b":
         raise _problem(source, column, first_row, "holds booleans, not numbers")
-    numbers = pd.to_numeric(pd.Series(values), errors="coerce").to_numpy(dtype=np.float64)
+    try:
+        numbers = pd.to_numeric(pd.Series(values), errors="coerce").to_numpy(dtype=np.float64)
+    except OverflowError:
+        numbers = _as_float_one_by_one(values, source, column, first_row)
     missing = pd.isna(pd.Series(values)).to_numpy()
     bad = np.flatnonzero(np.isnan(numbers) & ~missing)
     if bad.size:
@@ -212,7 +232,9 @@ _NOT_AN_ANGLE = (
     "holds the angle {value} rad, beyond ±4π rad; is the column in degrees? Declare its unit "
     "as 'deg'"
 )
-_NOT_A_LABEL = "holds {value}; labels must be non-negative integers (0 = no collision)"
+_NOT_A_LABEL = "holds {value}; labels must be non-negative integers up to 2**53 (0 = no collision)"
+# Beyond it a float no longer holds every integer, and int64 overflows soon after.
+_MAX_LABEL = 2.0**53
 
 
 def _not_finite(values: FloatArray) -> NDArray[np.bool_]:
@@ -224,7 +246,7 @@ def _beyond_angle_limit(values: FloatArray) -> NDArray[np.bool_]:
 
 
 def _not_a_label(values: FloatArray) -> NDArray[np.bool_]:
-    return (values < 0.0) | (values != np.round(values))
+    return (values < 0.0) | (values > _MAX_LABEL) | (values != np.round(values))
 
 
 def checked_column(
@@ -355,7 +377,8 @@ class _Segment:
         rows = values[self.start : self.stop]
         if self.regular:
             return rows
-        return _freeze(interpolate(self.grid, t[self.start : self.stop], rows))
+        with np.errstate(over="ignore", invalid="ignore"):  # refused by regularize
+            return _freeze(interpolate(self.grid, t[self.start : self.stop], rows))
 
     def labels(self, t: FloatArray, labels: NDArray[np.int64]) -> NDArray[np.int64]:
         """Labels on the grid: those of the latest row at or before each grid time."""
@@ -409,8 +432,9 @@ def regularize(
     Raises
     ------
     LogFormatError
-        Fewer than 2 distinct time stamps, or no two consecutive ones within
-        the gap tolerance.
+        Fewer than 2 distinct time stamps, stamps too far apart for float64
+        to keep their steps once measured from the earliest, or no two
+        consecutive ones within the gap tolerance.
     InputValueError
         ``dt`` or ``gap_tolerance`` is not positive and finite.
     """
@@ -423,8 +447,15 @@ def regularize(
         )
     start = float(recording.t[0])
     report["time_origin"] = recording.time_origin + start
-    t = _freeze(recording.t - start)
-    steps = np.diff(t)
+    with np.errstate(over="ignore", invalid="ignore"):  # refused, with the span, below
+        t = _freeze(recording.t - start)
+        steps = np.diff(t)
+    if not (np.all(np.isfinite(t)) and np.all(steps > 0.0)):
+        raise LogFormatError(
+            f"{source}: the time stamps run from {start!r} to {float(recording.t[-1])!r} s (from "
+            "the first row): too wide a span for float64 to keep every step apart once measured "
+            "from the earliest; is a time stamp wrong?"
+        )
     period = _median_period(steps) if dt is None else check_dt(dt)
     tolerance = (
         DEFAULT_MAX_GAP * period
@@ -452,6 +483,14 @@ def regularize(
     }
     segments = [_Segment(a, b, t, period) for a, b in kept]
     columns = _segment_columns(recording, t, segments)
+    for segment, out in zip(segments, columns, strict=True):
+        overflowed = [g for g, v in out.items() if not segment.regular and not np.isfinite(v).all()]
+        if overflowed:
+            # Between +-1e308 and -+1e308 the linear interpolation overflows.
+            raise LogFormatError(
+                f"{source}: {overflowed[0]} holds values too large to resample onto the regular "
+                f"grid (the interpolation overflows float64 near t = {t[segment.start]:.6g} s)"
+            )
     logs = []
     for index, segment in enumerate(segments):
         metadata: dict[str, Any] = {} if provenance.robot is None else {"robot": provenance.robot}

@@ -290,8 +290,14 @@ def load_csv_spec(spec: CsvSpec | Mapping[str, Any] | str | Path) -> CsvSpec:
                 f"specs {available_csv_specs()}"
             )
         origin = str(path)
-        with path.open(encoding="utf-8") as handle:
-            content = yaml.safe_load(handle)
+        try:
+            with path.open(encoding="utf-8") as handle:
+                content = yaml.safe_load(handle)
+        except (yaml.YAMLError, UnicodeDecodeError) as exc:
+            reason = " ".join(str(exc).split())
+            raise InputValueError(
+                f"invalid CSV import spec ({origin}): not a readable YAML file: {reason}"
+            ) from None
         if not isinstance(content, Mapping):
             raise InputValueError(
                 f"invalid CSV import spec ({origin}): a YAML mapping is needed; got "

@@ -85,6 +85,11 @@ class _Layout:
     reference: NDArray[np.uint8]
 
 
+def _one_line(exc: BaseException) -> str:
+    """The message of a reader's exception on one line (YAML errors quote the file)."""
+    return " ".join(str(exc).split())
+
+
 def _align(offset: int, size: int) -> int:
     return (offset + size - 1) // size * size
 
@@ -147,6 +152,13 @@ class _Decoder:
         message = self._deserialize(first, 0)
         names = list(message.name)
         self.joints = list(names if joints is None else joints)
+        if not self.joints:
+            if joints is not None:
+                raise InputValueError("joints must name at least one joint, or be None for all")
+            raise LogFormatError(
+                f"{source}: topic {topic!r}, field 'name', message 0: names no joint; the first "
+                f"message sets the joints of the log"
+            )
         missing = [joint for joint in self.joints if joint not in names]
         if missing:
             raise InputValueError(
@@ -181,7 +193,7 @@ class _Decoder:
         except (SerdeError, ValueError, IndexError, struct.error) as exc:
             raise LogFormatError(
                 f"{self.source}: topic {self.topic!r}, message {row}: not a valid {JOINT_STATE} "
-                f"({type(exc).__name__}: {exc})"
+                f"({type(exc).__name__}: {_one_line(exc)})"
             ) from None
 
     def _check_count(self, message: Any, field: str, names: list[str], row: int) -> None:
@@ -354,8 +366,16 @@ def _read(source: Path, topic: str | None, joints: Sequence[str] | None, stamp: 
                     raws, received = [], []
             if raws:
                 skipped += decoder.decode(raws, received, done, buffer)
-    except ReaderError as exc:
-        raise LogFormatError(f"{source}: cannot be read as a ROS 2 bag: {exc}") from None
+    except (ReaderError, UnicodeDecodeError) as exc:
+        # A metadata.yaml that is not UTF-8 is not wrapped by rosbags.
+        raise LogFormatError(f"{source}: cannot be read as a ROS 2 bag: {_one_line(exc)}") from None
+    except (MemoryError, OverflowError):
+        # rosbags allocates the length a record header claims before reading it (beyond
+        # 2**63 bytes that is an OverflowError).
+        raise LogFormatError(
+            f"{source}: cannot be read as a ROS 2 bag: a record claims more bytes than memory "
+            "holds (a corrupt length field, or a bag too large for this machine)"
+        ) from None
     return _Messages(name, decoder, buffer.arrays(), skipped)
 
 
@@ -433,7 +453,9 @@ def import_ros2(
             continue
         if field == "effort" and effort_gains is not None:
             gains = per_joint(effort_gains, len(decoder.joints), "effort_gains", "N m", "positive")
-            values *= gains
+            with np.errstate(over="ignore"):  # checked again below
+                values *= gains
+            _check_values(source, name, "effort (times effort_gains)", decoder.joints, values, rows)
             conversions[group] = {"effort_gains": gains.tolist()}
         groups[group] = values
     units = {"t": "s", "q": "rad", "qd": "rad/s"}

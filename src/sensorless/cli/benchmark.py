@@ -11,9 +11,15 @@ import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from ..benchmark import BenchmarkScenario, full_config, quick_config, run_benchmark
+from ..exceptions import InputValueError
 from ._common import console, print_table
 
-__all__ = ["benchmark_command"]
+__all__ = ["MAX_DURATION", "MAX_RUNS", "benchmark_command"]
+
+MAX_RUNS = 100_000
+"""Most runs of each kind (--tuning, --collision, --free) ``benchmark`` accepts."""
+MAX_DURATION = 100_000.0
+"""Longest run [s] ``benchmark`` accepts (28 h)."""
 
 _SHOWN = [
     "scenario", "method", "n_detected", "n_collisions", "detection_rate", "strong_rate",
@@ -50,12 +56,14 @@ def benchmark_command(
         list[str] | None,
         typer.Option("--method", help="Threshold family (repeat); default the four fast ones."),
     ] = None,
-    n_tuning: Annotated[int | None, typer.Option("--tuning", help="Tuning runs N.")] = None,
+    n_tuning: Annotated[
+        int | None, typer.Option("--tuning", min=1, max=MAX_RUNS, help="Tuning runs N.")
+    ] = None,
     n_collision: Annotated[
-        int | None, typer.Option("--collision", help="Collision test runs M.")
+        int | None, typer.Option("--collision", min=1, max=MAX_RUNS, help="Collision test runs M.")
     ] = None,
     n_free: Annotated[
-        int | None, typer.Option("--free", help="Collision-free test runs K.")
+        int | None, typer.Option("--free", min=1, max=MAX_RUNS, help="Collision-free test runs K.")
     ] = None,
     seed: Annotated[int, typer.Option("--seed", help="Master seed of every run.")] = 0,
     false_alarm_rate: Annotated[
@@ -99,6 +107,16 @@ def benchmark_command(
     classification of the collision runs' events (contacts and confusion
     tables), PNG figures and index.html.
     """
+    if duration is not None and not 0.0 < duration <= MAX_DURATION:  # NaN fails too
+        raise InputValueError(f"--duration must be > 0 and <= {MAX_DURATION:g} s; got {duration!r}")
+    if logs is not None and "://" in logs:
+        import fsspec  # type: ignore[import-untyped]  # a dependency of dask
+
+        protocol = logs.split("://", 1)[0]
+        try:
+            fsspec.get_filesystem_class(protocol)
+        except (ImportError, ValueError) as exc:
+            raise InputValueError(f"--logs {logs!r}: {' '.join(str(exc).split())}") from None
     overrides: dict[str, Any] = {"false_alarm_rate": false_alarm_rate, "isolation": isolation}
     for key, value in (("n_tuning", n_tuning), ("n_collision", n_collision), ("n_free", n_free)):
         if value is not None:

@@ -10,9 +10,11 @@ import typer
 from rich.table import Table
 
 from .. import robots as robot_registry
+from .._validation import check_dt
 from ..detection import events_to_pandas
 from ..detection.levels import threshold_label
 from ..evaluation import comparison_table, evaluate, summary_table
+from ..exceptions import InputValueError
 from ..io import Log, read_log, write_log
 from ..monitor import (
     METHOD_NAMES,
@@ -31,6 +33,7 @@ from ..thresholds.files import family_name
 from ._common import console, nominal_robot, output_path, print_table, run_with_progress
 
 __all__ = [
+    "MAX_SAMPLES",
     "detect_command",
     "evaluate_command",
     "robot_summary",
@@ -39,6 +42,9 @@ __all__ = [
     "simulate_command",
     "tune_command",
 ]
+
+MAX_SAMPLES = 1e8
+"""Longest run ``simulate`` accepts [samples] (28 h at 1 kHz): longer ones do not fit in memory."""
 
 
 def robot_summary() -> Table:
@@ -109,7 +115,13 @@ def simulate_command(
     """Simulate a scenario and write its labelled log."""
     spec = load_scenario(scenario)
     if duration is not None:
-        spec = spec.with_duration(duration)
+        spec = spec.with_duration(check_dt(duration, "--duration"))
+    n_samples = spec.duration / spec.dt
+    if n_samples > MAX_SAMPLES:
+        raise InputValueError(
+            f"a run of {spec.duration:g} s at dt = {spec.dt:g} s is {n_samples:.3g} samples; "
+            f"at most {MAX_SAMPLES:.0e} are simulated (lower --duration or the file's duration)"
+        )
     output_path(output, suffixes=(".parquet", ".pq", ".csv"))
     result = run_with_progress(
         f"simulating {spec.name}",
@@ -179,6 +191,11 @@ def tune_command(
     folds_value = int(folds) if folds.strip().isdigit() else folds  # the library names the rest
     output_path(output, suffixes=(".yaml", ".yml"))
     runs = [read_log(path) for path in logs]
+    if isinstance(folds_value, int) and len(runs) == 1 and folds_value > runs[0].n_samples:
+        raise InputValueError(
+            f"--folds {folds_value}: one log of {runs[0].n_samples} samples cannot be cut into "
+            f"{folds_value} time blocks"
+        )
     settings = ObserverSettings(kind=kind or METHOD_NAMES.get(method, "motor"), gain=gain)
     nominal = nominal_robot(robot, runs[0], settings.kind)
     options: dict[str, Any] = {} if margin is None else {"margin": margin}

@@ -7,11 +7,17 @@ from typing import Annotated
 
 import typer
 
+from ..exceptions import InputValueError
 from ..learning import TrainingRecipe, scenario_for, train_detector
 from ..thresholds import save_weights
-from ._common import console, run_with_spinner
+from ._common import console, output_path, run_with_spinner
 
-__all__ = ["train_detector_command"]
+__all__ = ["MAX_MINUTES", "MAX_STEPS", "train_detector_command"]
+
+MAX_MINUTES = 10_080.0
+"""Most simulated minutes ``train-detector`` accepts (a week)."""
+MAX_STEPS = 1_000_000
+"""Most Adam steps ``train-detector`` accepts."""
 
 
 def train_detector_command(
@@ -24,7 +30,7 @@ def train_detector_command(
     scenario: Annotated[
         str | None, typer.Option("--scenario", help="Scenario name or file (default: the robot's).")
     ] = None,
-    steps: Annotated[int, typer.Option("--steps", help="Adam steps.")] = 1500,
+    steps: Annotated[int, typer.Option("--steps", min=1, max=MAX_STEPS, help="Adam steps.")] = 1500,
     payload_max: Annotated[
         float,
         typer.Option(
@@ -48,6 +54,12 @@ def train_detector_command(
     Each run draws its model error, noise, speed, payload (on the true robot)
     and sample rate; the weights file records the ranges and the draws.
     """
+    if not output.name or output.is_dir():
+        raise InputValueError(f"-o must be a file stem such as weights/panda; got {str(output)!r}")
+    for suffix in (".npz", ".json"):  # before the training, not after it
+        output_path(output.with_suffix(suffix))
+    if not 0.0 < minutes <= MAX_MINUTES:  # NaN fails too
+        raise InputValueError(f"--minutes must be > 0 and <= {MAX_MINUTES:g}; got {minutes!r}")
     recipe = TrainingRecipe(
         scenario=scenario or scenario_for(robot),
         minutes=minutes,

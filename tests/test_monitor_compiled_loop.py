@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import sys
 
 import numpy as np
@@ -129,17 +130,26 @@ def test_the_kernels_keep_no_reference_to_their_arrays(panda) -> None:
     """The stream step, a user's loop and the batch leave every array's reference count as it
     was: none kept (a leak), none released (an early free); the kernels' views
     (``robots._numba_views.view``) count their owner as numpy's reshape does."""
-    (t, q, tau), robot, tuned = panda
-    monitor = CollisionMonitor(robot, *tuned, backend="numba")
+    # Own copies, and no collection between the counts: a cycle of another test that the
+    # collector frees would change the count of a shared array.
+    t, q, tau = (array.copy() for array in panda[0])
+    monitor = CollisionMonitor(panda[1], *panda[2], backend="numba")
     function, model, buffers = monitor.compiled_step()
     fused = monitor._fused
+    loop = _user_loop()
     arrays = (t, q, tau, model, buffers)
-    before = [sys.getrefcount(array) for array in arrays]
-    for k in range(300):
-        monitor.step(t[k], q[k], tau[k])
-    codes = np.zeros(300, dtype=np.int64)
-    rows, events = np.zeros((300, 3, q.shape[1])), np.zeros((300, 5))
-    _user_loop()(function, model, buffers, t[:300], q[:300], tau[:300], codes, rows, events)
-    for chunk in (0, 128):
-        fused.block(t, (q, np.empty((t.size, 0)), tau, tau), "batch", chunk)
-    assert [sys.getrefcount(array) for array in arrays] == before
+    gc.collect()
+    gc.disable()
+    try:
+        before = [sys.getrefcount(array) for array in arrays]
+        for k in range(300):
+            monitor.step(t[k], q[k], tau[k])
+        codes = np.zeros(300, dtype=np.int64)
+        rows, events = np.zeros((300, 3, q.shape[1])), np.zeros((300, 5))
+        loop(function, model, buffers, t[:300], q[:300], tau[:300], codes, rows, events)
+        for chunk in (0, 128):
+            fused.block(t, (q, np.empty((t.size, 0)), tau, tau), "batch", chunk)
+        after = [sys.getrefcount(array) for array in arrays]
+    finally:
+        gc.enable()
+    assert after == before

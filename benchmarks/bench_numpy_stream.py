@@ -90,7 +90,7 @@ class BareObserver:
 
     def reset(self) -> None:
         self.q_last: np.ndarray | None = None
-        self.p0 = self.integral = self.r = np.zeros(self.model.nv)
+        self.p0, self.integral, self.r = (np.zeros(self.model.nv) for _ in range(3))
 
     def step(self, t: float, q: np.ndarray, tau: np.ndarray) -> bool:
         """One sample at time ``t`` [s]; whether a joint's residual leaves the band."""

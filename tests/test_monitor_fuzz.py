@@ -26,9 +26,11 @@ from test_monitor_compiled import assert_goes_on
 FAMILIES = ("constant", "time-variant", "hysteretic", "velocity", "model")
 COMPILED = ("constant", "time-variant", "hysteretic", "velocity")  # the numba stream's families
 needs_numba = pytest.mark.skipif(not numba_available(), reason="numba is not installed")
-CASES = [(m, "python") for m in FAMILIES] + [
-    pytest.param(m, "numba", marks=needs_numba) for m in COMPILED
-]
+CASES = (
+    [(m, "python") for m in FAMILIES]
+    + [pytest.param(m, "numba", marks=needs_numba) for m in COMPILED]
+    + [(m, "numpy") for m in COMPILED]  # the stream without numba: the same families
+)
 N_GOOD = 120  # good samples per example, after the settling window
 DT = 1e-3
 
@@ -95,6 +97,7 @@ def bad_sample(
     return t, q, draw(_bad_value(n))
 
 
+@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")  # numpy, q of 1e308
 @pytest.mark.parametrize(("method", "backend"), CASES)
 @settings(
     max_examples=25,

@@ -417,6 +417,27 @@ def test_valid_files_import(folder: Path) -> None:
         assert_valid_log(log)
 
 
+def test_a_byte_order_mark_is_read_as_nothing(folder: Path) -> None:
+    """A spreadsheet's UTF-8 byte-order mark before the header changes nothing; a missing
+    file is the library's MissingFileError (a FileNotFoundError)."""
+    bom = b"\xef\xbb\xbf"
+    cases = [
+        ("franka.csv", FRANKA, import_franka),
+        ("rtde.csv", UR_SPACE, lambda path: import_ur_rtde(path, robot="ur10")),
+        ("named.csv", HEADER_MAPPED, lambda path: import_csv(path, HEADER_SPEC)),
+    ]
+    for name, data, read in cases:
+        [plain] = read(write(folder / name, data))
+        [marked] = read(write(folder / f"bom-{name}", bom + data))
+        assert marked.groups == plain.groups
+        for group in ["t", *plain.groups]:
+            np.testing.assert_array_equal(getattr(marked, group), getattr(plain, group))
+        with pytest.raises(MissingFileError, match="does not exist"):
+            read(folder / f"missing-{name}")
+    with pytest.raises(MissingFileError, match="does not exist"):
+        import_ros2(folder / "no-such-bag")
+
+
 @fuzz(150)
 @given(data=mutated(FRANKA))
 def test_fuzz_franka(folder: Path, data: bytes) -> None:

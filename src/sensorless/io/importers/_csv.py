@@ -22,9 +22,10 @@ import numpy as np
 import pandas as pd
 
 from ..._validation import FloatArray
-from ...exceptions import InputValueError, LogFormatError
+from ...exceptions import InputValueError, LogFormatError, MissingFileError
 from ..columns import abbreviate, show_value
-from ._pipeline import ColumnKind, Recording, RowBuffer, checked_column
+from ._checks import ColumnKind, checked_column
+from ._pipeline import Recording, RowBuffer
 
 __all__ = [
     "CHUNK_ROWS",
@@ -99,8 +100,9 @@ class CsvLayout:
 
 def _first_line(path: Path) -> str:
     if not path.is_file():
-        raise FileNotFoundError(f"{path} does not exist or is not a file")
-    with path.open(encoding="utf-8", errors="replace", newline="") as handle:
+        raise MissingFileError(f"{path} does not exist or is not a file")
+    # utf-8-sig: a byte-order mark (spreadsheets write one) is not part of the first name
+    with path.open(encoding="utf-8-sig", errors="replace", newline="") as handle:
         line = handle.readline().rstrip("\r\n")
     if not line.strip():
         raise LogFormatError(f"{path}: the first line is empty; expected a header or data")

@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..._validation import FloatArray, per_joint
-from ...exceptions import InputValueError, LogFormatError
+from ...exceptions import InputValueError, LogFormatError, MissingFileError
 from ..columns import ANGLE_LIMIT, show_value
 from ..log import Log
 from ._pipeline import Provenance, Recording, RowBuffer, Timebase, regularize, timebase_doc
@@ -433,7 +433,7 @@ def import_ros2(
             f"effort must be one of {list(EFFORT_GROUPS)} or None; got {effort!r}"
         )
     if not source.exists():
-        raise FileNotFoundError(f"{source} does not exist")
+        raise MissingFileError(f"{source} does not exist")
     messages = _read(source, topic, joints, stamp)
     name, decoder = messages.topic, messages.decoder
     rows, stamps = messages.rows.pop("row"), messages.rows.pop("stamp")

@@ -52,8 +52,9 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationEr
 
 from ...exceptions import InputValueError, UnknownNameError
 from ..log import Log
+from ._checks import ColumnKind
 from ._csv import TIME_SCALES, ColumnKey, CsvLayout, read_recording
-from ._pipeline import ColumnKind, Provenance, Timebase, regularize, timebase_doc
+from ._pipeline import Provenance, Timebase, regularize, timebase_doc
 
 if TYPE_CHECKING:
     from typing import Unpack

@@ -238,6 +238,12 @@ def test_cross_validation_by_run_and_by_time_block() -> None:
         cross_validate(train, ConstantThreshold(), folds="blocks")
     with pytest.raises(InputValueError, match="folds must be an integer >= 2"):
         cross_validate(train, ConstantThreshold(), folds=1)
+    short = filtered_run(rng, 0.4)  # 40 samples: one run cuts into blocks of >= 2 samples
+    twenty = cross_validate([short], ConstantThreshold(transient=0.0), folds=20)
+    assert len(twenty.fold_events) == 20
+    for many in (21, 10**20):  # 10**20 was an array too large to allocate
+        with pytest.raises(InputValueError, match=f"into {many} time blocks.*at most 20"):
+            cross_validate([short], ConstantThreshold(transient=0.0), folds=many)
 
 
 def test_cross_validation_leaves_the_threshold_alone() -> None:

@@ -3,12 +3,19 @@
 from __future__ import annotations
 
 import copy
+import math
 
 import numpy as np
 import pytest
 import yaml
 
-from sensorless.exceptions import FileFormatError, MissingFileError, ModelError, UnknownNameError
+from sensorless.exceptions import (
+    FileFormatError,
+    InputValueError,
+    MissingFileError,
+    ModelError,
+    UnknownNameError,
+)
 from sensorless.io import read_log
 from sensorless.simulation.plants import RigidPlant
 from sensorless.simulation.scenario import (
@@ -77,6 +84,9 @@ def test_unknown_and_malformed_scenarios_give_clear_errors(tmp_path) -> None:
     spec["trajectory"]["type"] = "spline"
     with pytest.raises(ModelError, match="unknown trajectory type 'spline'"):
         Scenario("bad", spec).build()
+    for seconds in (0.0, -1.0, math.inf, math.nan):
+        with pytest.raises(InputValueError, match="duration must be a positive, finite number"):
+            load_scenario("panda-gaz").with_duration(seconds)
 
 
 def test_generator_writes_free_and_collision_runs_with_disjoint_seeds(tmp_path) -> None:

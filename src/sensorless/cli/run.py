@@ -191,11 +191,6 @@ def tune_command(
     folds_value = int(folds) if folds.strip().isdigit() else folds  # the library names the rest
     output_path(output, suffixes=(".yaml", ".yml"))
     runs = [read_log(path) for path in logs]
-    if isinstance(folds_value, int) and len(runs) == 1 and folds_value > runs[0].n_samples:
-        raise InputValueError(
-            f"--folds {folds_value}: one log of {runs[0].n_samples} samples cannot be cut into "
-            f"{folds_value} time blocks"
-        )
     settings = ObserverSettings(kind=kind or METHOD_NAMES.get(method, "motor"), gain=gain)
     nominal = nominal_robot(robot, runs[0], settings.kind)
     options: dict[str, Any] = {} if margin is None else {"margin": margin}

@@ -193,6 +193,11 @@ def held_out_pieces(
         count = check_int(folds, "folds", 2, "cross-validation")
     if n_runs == 1:
         run = runs[0]
+        if count > run.n_samples // 2:  # each block needs two samples
+            raise InputValueError(
+                f"folds = {count}: one run of {run.n_samples} samples cannot be cut into {count} "
+                f"time blocks of at least 2 samples (at most {run.n_samples // 2})"
+            )
         cuts = np.searchsorted(run.t, np.linspace(run.t[0], run.t[-1], count + 1)[1:-1])
         edges = [0, *cuts.tolist(), run.n_samples]
         parts = [[rows(run, a, b)] for a, b in itertools.pairwise(edges)]

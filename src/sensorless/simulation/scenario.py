@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from .._validation import check_scalar
+from .._validation import check_dt, check_scalar
 from .._version import __version__
 from ..exceptions import InputValueError, MissingFileError, ModelError, UnknownNameError
 from ..friction import Coulomb, CoulombViscous, FrictionModel, LuGre
@@ -124,8 +124,9 @@ class Scenario:
 
     def with_duration(self, seconds: float) -> Scenario:
         """The same scenario cut (or extended) to ``seconds`` [s]; random contacts scale along."""
+        seconds = check_dt(seconds, "duration")
         spec = copy.deepcopy(self.spec)
-        spec["duration"] = float(seconds)
+        spec["duration"] = seconds
         if "random_collisions" in spec:
             count = int(spec["random_collisions"]["count"])
             spec["random_collisions"]["count"] = max(1, round(count * seconds / self.duration))

@@ -5,7 +5,8 @@ Every error raised on purpose by the library derives from
 exception a Python user would expect (``ValueError``, ``TypeError``,
 ``KeyError``, ``FileNotFoundError``), so ``except ValueError`` keeps working.
 Messages state what was expected, what was received and, where there is a
-closed set, the valid options.
+closed set, the valid options; :func:`one_line` puts a third-party error's
+message on one line inside one of ours.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ __all__ = [
     "NotFittedError",
     "SensorlessError",
     "UnknownNameError",
+    "one_line",
 ]
 
 
@@ -76,3 +78,12 @@ class MissingFileError(SensorlessError, FileNotFoundError):
 
 class LogFormatError(FileFormatError):
     """A log file or table does not have the expected columns, time base or values."""
+
+
+def one_line(reason: object) -> str:
+    """``str(reason)`` on one line: runs of whitespace and line breaks become one space.
+
+    For the message of a third-party error (YAML, CSV and Parquet readers,
+    rosbags) quoted inside one of ours, which the CLI prints as one line.
+    """
+    return " ".join(str(reason).split())

@@ -35,7 +35,7 @@ from rich.progress import (
 )
 
 from .. import robots as robot_registry
-from ..exceptions import FileFormatError, InputValueError, ModelError, SensorlessError
+from ..exceptions import FileFormatError, InputValueError, ModelError, SensorlessError, one_line
 from ..io import Log
 from ..robots.model import RobotModel
 from ..simulation.scenario import load_scenario
@@ -84,7 +84,7 @@ def _describe(exc: BaseException) -> str:
         reason = exc.strerror or type(exc).__name__
         return f"{exc.filename}: {reason}"
     if isinstance(exc, yaml.YAMLError):
-        return f"not a valid YAML file: {' '.join(str(exc).split())}"
+        return f"not a valid YAML file: {one_line(exc)}"
     if _exit_code(exc) == EXIT_INTERNAL:
         return f"internal error {type(exc).__name__}: {exc} (rerun with --debug for the traceback)"
     return str(exc)

@@ -11,7 +11,7 @@ import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from ..benchmark import BenchmarkScenario, full_config, quick_config, run_benchmark
-from ..exceptions import InputValueError
+from ..exceptions import InputValueError, one_line
 from ._common import console, print_table
 
 __all__ = ["MAX_DURATION", "MAX_RUNS", "benchmark_command"]
@@ -116,7 +116,7 @@ def benchmark_command(
         try:
             fsspec.get_filesystem_class(protocol)
         except (ImportError, ValueError) as exc:
-            raise InputValueError(f"--logs {logs!r}: {' '.join(str(exc).split())}") from None
+            raise InputValueError(f"--logs {logs!r}: {one_line(exc)}") from None
     overrides: dict[str, Any] = {"false_alarm_rate": false_alarm_rate, "isolation": isolation}
     for key, value in (("n_tuning", n_tuning), ("n_collision", n_collision), ("n_free", n_free)):
         if value is not None:

@@ -42,7 +42,7 @@ from pydantic import (
 from pydantic_core import PydanticCustomError
 
 from .._version import __version__
-from ..exceptions import FileFormatError
+from ..exceptions import FileFormatError, one_line
 
 __all__ = [
     "Count",
@@ -423,7 +423,7 @@ def _yaml_reason(exc: yaml.YAMLError) -> str:
     mark = getattr(exc, "problem_mark", None)
     problem = getattr(exc, "problem", None) or str(exc)
     where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
-    return f"{' '.join(str(problem).split())}{where}"
+    return f"{one_line(problem)}{where}"
 
 
 def read_yaml_mapping(path: str | Path, what: str) -> dict[Any, Any]:

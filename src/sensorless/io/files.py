@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import pandas as pd
 
 from .._version import __version__
-from ..exceptions import DimensionError, InputValueError, LogFormatError, MissingFileError
+from ..exceptions import DimensionError, InputValueError, LogFormatError, MissingFileError, one_line
 from .columns import UNITS, abbreviate
 from .log import Log
 from .validate import TableChecks
@@ -201,8 +201,7 @@ def read_log(
         if isinstance(exc, OSError) and exc.errno is not None:
             raise  # the system's error (permissions, a folder, ...), not the content's
         # pyarrow reports a corrupt Parquet file as an OSError without errno.
-        reason = " ".join(str(exc).split())
-        raise LogFormatError(f"cannot read {path} as {fmt}: {reason}") from None
+        raise LogFormatError(f"cannot read {path} as {fmt}: {one_line(exc)}") from None
     metadata = sidecar.get("metadata", {}) if sidecar is not None else {}
     try:
         log = Log.from_pandas(table, metadata, n_dof, **checks)

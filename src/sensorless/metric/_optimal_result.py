@@ -11,7 +11,7 @@ import yaml
 
 from .._validation import FloatArray
 from .._version import __version__
-from ..exceptions import InputValueError
+from ..exceptions import InputValueError, one_line
 from ..trajectories import SplineTrajectory, Trajectory
 
 __all__ = ["PlannedTrajectory", "load_plan"]
@@ -167,7 +167,7 @@ def load_plan(path: str | Path) -> SplineTrajectory:
     try:
         data = yaml.safe_load(text)
     except yaml.YAMLError as exc:
-        raise InputValueError(f"{path} is not a YAML file: {' '.join(str(exc).split())}") from None
+        raise InputValueError(f"{path} is not a YAML file: {one_line(exc)}") from None
     if isinstance(data, dict) and "trajectory" in data:
         data = data["trajectory"]
     if not isinstance(data, dict):

@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 
 from ..._validation import FloatArray
-from ...exceptions import InputValueError, LogFormatError, MissingFileError
+from ...exceptions import InputValueError, LogFormatError, MissingFileError, one_line
 from ..columns import abbreviate, show_value
 from ._checks import ColumnKind, checked_column
 from ._pipeline import Recording, RowBuffer
@@ -245,8 +245,7 @@ def _chunks(path: Path, layout: CsvLayout, sep: str) -> Iterator[pd.DataFrame]:
                     chunk.columns = [str(name).strip() for name in chunk.columns]
                 yield chunk
     except (ValueError, pd.errors.ParserError) as exc:
-        reason = " ".join(str(exc).split())
-        raise LogFormatError(f"{path}: cannot be parsed as CSV: {reason}") from None
+        raise LogFormatError(f"{path}: cannot be parsed as CSV: {one_line(exc)}") from None
 
 
 def _column(

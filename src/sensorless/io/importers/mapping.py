@@ -50,7 +50,7 @@ import numpy as np
 import yaml
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, model_validator
 
-from ...exceptions import InputValueError, UnknownNameError
+from ...exceptions import InputValueError, UnknownNameError, one_line
 from ..log import Log
 from ._checks import ColumnKind
 from ._csv import TIME_SCALES, ColumnKey, CsvLayout, read_recording
@@ -295,9 +295,8 @@ def load_csv_spec(spec: CsvSpec | Mapping[str, Any] | str | Path) -> CsvSpec:
             with path.open(encoding="utf-8") as handle:
                 content = yaml.safe_load(handle)
         except (yaml.YAMLError, UnicodeDecodeError) as exc:
-            reason = " ".join(str(exc).split())
             raise InputValueError(
-                f"invalid CSV import spec ({origin}): not a readable YAML file: {reason}"
+                f"invalid CSV import spec ({origin}): not a readable YAML file: {one_line(exc)}"
             ) from None
         if not isinstance(content, Mapping):
             raise InputValueError(

@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..._validation import FloatArray, per_joint
-from ...exceptions import InputValueError, LogFormatError, MissingFileError
+from ...exceptions import InputValueError, LogFormatError, MissingFileError, one_line
 from ..columns import ANGLE_LIMIT, show_value
 from ..log import Log
 from ._pipeline import Provenance, Recording, RowBuffer, Timebase, regularize, timebase_doc
@@ -83,11 +83,6 @@ class _Layout:
     # frame, names, counts), and the first message's bytes: equal runs, equal layout.
     runs: tuple[tuple[int, int], ...]
     reference: NDArray[np.uint8]
-
-
-def _one_line(exc: BaseException) -> str:
-    """The message of a reader's exception on one line (YAML errors quote the file)."""
-    return " ".join(str(exc).split())
 
 
 def _align(offset: int, size: int) -> int:
@@ -193,7 +188,7 @@ class _Decoder:
         except (SerdeError, ValueError, IndexError, struct.error) as exc:
             raise LogFormatError(
                 f"{self.source}: topic {self.topic!r}, message {row}: not a valid {JOINT_STATE} "
-                f"({type(exc).__name__}: {_one_line(exc)})"
+                f"({type(exc).__name__}: {one_line(exc)})"
             ) from None
 
     def _check_count(self, message: Any, field: str, names: list[str], row: int) -> None:
@@ -368,7 +363,7 @@ def _read(source: Path, topic: str | None, joints: Sequence[str] | None, stamp: 
                 skipped += decoder.decode(raws, received, done, buffer)
     except (ReaderError, UnicodeDecodeError) as exc:
         # A metadata.yaml that is not UTF-8 is not wrapped by rosbags.
-        raise LogFormatError(f"{source}: cannot be read as a ROS 2 bag: {_one_line(exc)}") from None
+        raise LogFormatError(f"{source}: cannot be read as a ROS 2 bag: {one_line(exc)}") from None
     except (MemoryError, OverflowError):
         # rosbags allocates the length a record header claims before reading it (beyond
         # 2**63 bytes that is an OverflowError).
